@@ -1,0 +1,29 @@
+"""ament_python package of the learner's nodes and their ROS-free core."""
+
+from glob import glob
+
+from setuptools import find_packages, setup
+
+PACKAGE = "sgim_nodes"
+
+setup(
+    name=PACKAGE,
+    version="0.1.0",
+    packages=find_packages(exclude=["test", "tests"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
+        (f"share/{PACKAGE}", ["package.xml"]),
+        (f"share/{PACKAGE}/config", glob("config/*.yaml")),
+    ],
+    install_requires=["setuptools"],
+    zip_safe=False,
+    maintainer="SGIM-ROS maintainers",
+    maintainer_email="maintainers@sgim-ros.org",
+    description="SGIM-D learner nodes over a pure-Python core.",
+    license="Apache-2.0",
+    entry_points={
+        "console_scripts": [
+            "learn = sgim_nodes.core.runner:main",
+        ],
+    },
+)

@@ -1,0 +1,1 @@
+"""sgim_nodes: the learner of the SGIM-D / SAGG-RIAC toolkit (ROS nodes live beside ``core``)."""

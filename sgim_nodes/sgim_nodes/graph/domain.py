@@ -1,0 +1,68 @@
+"""Reserve a ROS_DOMAIN_ID that no other run on this host is using.
+
+Two graphs on one domain mix their topics, so every run and every test run takes its own.
+A domain is held by binding a loopback TCP port derived from it for as long as the
+reservation lives; the operating system frees it when the process dies, so a crashed run
+never leaks a reservation.
+"""
+
+from __future__ import annotations
+
+import os
+import random
+import socket
+from dataclasses import dataclass, field
+
+# Above the DDS port range of domains 0-232 (7400 + 250 * id + offsets, at most about 65,500)
+# would collide, so stay in the low ephemeral range, which Linux hands out from 32768 upwards
+# only when asked for port 0 and the default range is exhausted.
+PORT_BASE = 30000
+FIRST_DOMAIN = 1
+LAST_DOMAIN = 100  # Fast DDS accepts 0-232 on Linux; 1-100 leaves room for other tools
+
+
+@dataclass
+class DomainReservation:
+    """A reserved domain id; release() or process exit frees it."""
+
+    domain_id: int
+    _socket: socket.socket = field(repr=False)
+
+    def release(self) -> None:
+        self._socket.close()
+
+    def __enter__(self) -> DomainReservation:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()
+
+
+def reserve_domain(preferred: int | None = None) -> DomainReservation:
+    """Reserve a free domain id, `preferred` first if given; RuntimeError when none is free."""
+    candidates = list(range(FIRST_DOMAIN, LAST_DOMAIN + 1))
+    random.Random(os.getpid()).shuffle(candidates)
+    if preferred is not None:
+        if not 0 <= preferred <= 232:
+            raise ValueError(f"ROS_DOMAIN_ID must be in 0..232, got {preferred}")
+        candidates.insert(0, preferred)
+    for domain_id in candidates:
+        sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        try:
+            sock.bind(("127.0.0.1", PORT_BASE + domain_id))
+        except OSError:
+            sock.close()
+            continue
+        return DomainReservation(domain_id, sock)
+    raise RuntimeError(
+        f"no free ROS domain in {FIRST_DOMAIN}..{LAST_DOMAIN}: too many runs on this host?"
+    )
+
+
+def isolated_ros_environment(domain_id: int, base: dict[str, str] | None = None) -> dict[str, str]:
+    """The environment of a process that must only talk to its own graph on this host."""
+    env = dict(os.environ if base is None else base)
+    env["ROS_DOMAIN_ID"] = str(domain_id)
+    env.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    env.pop("ROS_LOCALHOST_ONLY", None)  # deprecated; it would override the range above
+    return env
