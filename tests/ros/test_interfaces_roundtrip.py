@@ -4,26 +4,17 @@ from __future__ import annotations
 
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
 
+from tests.ros.graph_client import GraphClient
 from tests.ros.interface_samples import filled, message_class, message_names
 
 pytestmark = pytest.mark.ros
 
 PEER = Path(__file__).resolve().parent / "peers" / "echo_peer.py"
-TIMEOUT = 30.0
-
-
-def _spin_until(executor, condition, timeout: float = TIMEOUT) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        executor.spin_once(timeout_sec=0.05)
-    return condition()
+TIMEOUT = 30.0  # s, for discovery and calls
 
 
 @pytest.fixture
@@ -38,15 +29,9 @@ def peer(ros_processes):
 
 @pytest.fixture
 def node(rclpy_context):
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.node import Node
-
-    node = Node("roundtrip_test", context=rclpy_context)
-    executor = SingleThreadedExecutor(context=rclpy_context)
-    executor.add_node(node)
-    yield node, executor
-    executor.shutdown()
-    node.destroy_node()
+    client = GraphClient(rclpy_context, "roundtrip_test")
+    yield client.node, client.spin_until
+    client.close()
 
 
 def test_every_message_type_crosses_processes(peer, node):
@@ -55,7 +40,7 @@ def test_every_message_type_crosses_processes(peer, node):
     qos = QoSProfile(
         depth=10, history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE
     )
-    node, executor = node
+    node, spin_until = node
     names = message_names()
     assert len(names) >= 7, names
     received: dict[str, object] = {}
@@ -67,8 +52,7 @@ def test_every_message_type_crosses_processes(peer, node):
             cls, f"/roundtrip/out/{name}", lambda m, n=name: received.setdefault(n, m), qos
         )
     # Wait on graph state, never on a fixed sleep: both directions matched for every type.
-    matched = _spin_until(
-        executor,
+    matched = spin_until(
         lambda: all(
             p.get_subscription_count() > 0 and node.count_publishers(f"/roundtrip/out/{n}") > 0
             for n, p in publishers.items()
@@ -79,7 +63,7 @@ def test_every_message_type_crosses_processes(peer, node):
     for seed, name in enumerate(names, start=1):
         sent[name] = filled(message_class(name), seed)
         publishers[name].publish(sent[name])
-    assert _spin_until(executor, lambda: len(received) == len(names)), sorted(received)
+    assert spin_until(lambda: len(received) == len(names)), sorted(received)
     for name in names:
         assert received[name] == sent[name], f"{name} changed on the way"
         assert received[name] != message_class(name)(), f"{name} sample is all defaults"
@@ -89,13 +73,13 @@ def test_execute_action_service_across_processes(peer, node):
     from sgim_msgs.msg import Movement
     from sgim_msgs.srv import ExecuteAction
 
-    node, executor = node
+    node, spin_until = node
     client = node.create_client(ExecuteAction, "/roundtrip/execute_action")
     assert client.wait_for_service(timeout_sec=TIMEOUT)
 
     def call(action):
         future = client.call_async(ExecuteAction.Request(action=action, record=False))
-        assert _spin_until(executor, future.done)
+        assert spin_until(future.done)
         return future.result()
 
     good = call([0.5] * 12 + [-0.25] * 12)
@@ -111,7 +95,7 @@ def test_reach_goal_action_across_processes(peer, node):
 
     from sgim_msgs.action import ReachGoal
 
-    node, executor = node
+    node, spin_until = node
     client = ActionClient(node, ReachGoal, "/roundtrip/reach_goal")
     assert client.wait_for_server(timeout_sec=TIMEOUT)
     feedback = []
@@ -119,11 +103,11 @@ def test_reach_goal_action_across_processes(peer, node):
         ReachGoal.Goal(goal=[0.1, -0.3], goal_index=7, max_movements=3),
         feedback_callback=lambda f: feedback.append(f.feedback.movements_done),
     )
-    assert _spin_until(executor, send.done)
+    assert spin_until(send.done)
     handle = send.result()
     assert handle.accepted
     result_future = handle.get_result_async()
-    assert _spin_until(executor, result_future.done)
+    assert spin_until(result_future.done)
     result = result_future.result().result
     assert list(result.reached) == pytest.approx([0.1, -0.3])
     assert result.movements_used == 3 and result.competence == pytest.approx(-0.25)

@@ -1,0 +1,1 @@
+"""ROS glue shared by every node of the graph: QoS of the records and parameter checks."""

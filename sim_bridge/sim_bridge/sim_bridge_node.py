@@ -1,0 +1,111 @@
+"""ROS 2 node that executes actions in the fishing world: the ExecuteAction service.
+
+Thin by design: validation and physics live in fishing_world; this node translates the
+request, stamps the result and publishes every executed movement on `movements` for the
+recorder. Bad input is answered with STATUS_INVALID_ACTION and a message, never a crash, and
+is not published (nothing was executed).
+
+Interfaces:
+  service  execute_action (sgim_msgs/srv/ExecuteAction)
+  topic    movements      (sgim_msgs/msg/Movement, RECORDS QoS: reliable, keep all)
+Parameters: seed, noise, time_step (see PARAMS).
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import rclpy
+from rclpy.node import Node
+
+from sgim_msgs.msg import Movement
+from sgim_msgs.srv import ExecuteAction
+from sgim_ros import qos
+from sgim_ros.params import Param, ParameterError, declare, non_negative
+from sim_bridge.fishing_world import DEFAULT_NOISE, DEFAULT_TIME_STEP, FishingWorld
+
+PARAMS = (
+    Param(
+        "seed",
+        0,
+        "seed of the motor-command noise; same seed, same outcomes",
+        lambda v: v >= 0,
+        ">= 0",
+    ),
+    Param(
+        "noise", DEFAULT_NOISE, "std of the noise added to the motor commands", non_negative, ">= 0"
+    ),
+    Param(
+        "time_step",
+        DEFAULT_TIME_STEP,
+        "physics time step in seconds",
+        lambda v: 0 < v <= 0.01,
+        "in (0, 0.01]",
+    ),
+)
+
+
+class SimBridgeNode(Node):
+    def __init__(self) -> None:
+        super().__init__("sim_bridge")
+        p = declare(self, PARAMS)
+        self.world = FishingWorld(seed=p["seed"], noise=p["noise"], time_step=p["time_step"])
+        self.executed = 0
+        self._movements = self.create_publisher(Movement, "movements", qos.RECORDS)
+        self.create_service(ExecuteAction, "execute_action", self._execute)
+        self.get_logger().info(
+            f"fishing world ready (seed {p['seed']}, noise {p['noise']}, "
+            f"dt {p['time_step']:.5f} s, action size {self.world.action_dim})"
+        )
+
+    def _execute(self, request: ExecuteAction.Request, response: ExecuteAction.Response):
+        result = self.world.execute(np.asarray(request.action, dtype=float))
+        response.status = int(result.status)
+        response.message = result.message
+        if result.outcome is not None:
+            response.outcome = [float(v) for v in result.outcome]
+        if result.status == Movement.STATUS_INVALID_ACTION:
+            self.get_logger().warning(f"refused an action: {result.message}")
+            return response
+        self.executed += 1
+        if request.record:
+            self._movements.publish(
+                Movement(
+                    stamp=self.get_clock().now().to_msg(),
+                    index=request.movement_index,
+                    process=request.process,
+                    status=response.status,
+                    action=list(request.action),
+                    outcome=response.outcome,
+                    goal=list(request.goal),
+                    goal_index=request.goal_index,
+                )
+            )
+        return response
+
+    def destroy_node(self) -> None:
+        self.world.close()
+        super().destroy_node()
+
+
+def main(args: list[str] | None = None) -> int:
+    rclpy.init(args=args)
+    try:
+        node = SimBridgeNode()
+    except ParameterError as error:
+        print(f"sim_bridge: {error}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return 2
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,47 @@
+"""An rclpy node for tests: spin-until helpers, service calls and topic capture."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+DEFAULT_TIMEOUT = 30.0
+
+
+class GraphClient:
+    """Wraps one node and its executor so tests read as steps, not spin loops."""
+
+    def __init__(self, context, name: str = "test_client") -> None:
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.node import Node
+
+        self.node = Node(name, context=context)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+
+    def spin_until(self, condition: Callable[[], bool], timeout: float = DEFAULT_TIMEOUT) -> bool:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if condition():
+                return True
+            self.executor.spin_once(timeout_sec=0.05)
+        return condition()
+
+    def spin_for(self, seconds: float) -> None:
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.05)
+
+    def call(self, client, request, timeout: float = DEFAULT_TIMEOUT):
+        future = client.call_async(request)
+        assert self.spin_until(future.done, timeout), "service call timed out"
+        return future.result()
+
+    def capture(self, msg_type, topic: str, qos) -> list:
+        received: list = []
+        self.node.create_subscription(msg_type, topic, received.append, qos)
+        return received
+
+    def close(self) -> None:
+        self.executor.shutdown()
+        self.node.destroy_node()
