@@ -1,0 +1,41 @@
+"""The setup step: clear messages for missing prerequisites, nothing redone when nothing changed."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+
+from tests.conftest import REPO
+
+BOOTSTRAP = str(REPO / "bootstrap.sh")
+
+
+def _run(env_extra: dict[str, str]) -> subprocess.CompletedProcess:
+    env = dict(os.environ, **env_extra)
+    return subprocess.run(
+        [BOOTSTRAP], env=env, capture_output=True, text=True, timeout=600, cwd=REPO
+    )
+
+
+def test_missing_python_names_what_to_install():
+    result = _run({"SGIM_PYTHON": "python3.11-that-does-not-exist"})
+    assert result.returncode == 1
+    assert "apt-get install python3.11" in result.stderr
+
+
+def test_wrong_python_version_is_refused(tmp_path):
+    fake = tmp_path / "python-fake"
+    fake.write_text('#!/bin/sh\n[ "$1" = --version ] && echo "Python 3.9.2" && exit 0\nexit 1\n')
+    fake.chmod(0o755)
+    result = _run({"SGIM_PYTHON": str(fake)})
+    assert result.returncode == 1
+    assert "3.11 exactly" in result.stderr and "3.9.2" in result.stderr
+
+
+def test_second_run_redoes_nothing():
+    first = _run({})
+    assert first.returncode == 0, first.stderr[-2000:]
+    second = _run({})
+    assert second.returncode == 0
+    assert "installing" not in second.stderr and "building" not in second.stderr
+    assert "ready" in second.stderr
