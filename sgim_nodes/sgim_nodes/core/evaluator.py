@@ -1,0 +1,54 @@
+"""Evaluation: how well the learner's inverse model reaches a fixed set of benchmark goals.
+
+For each goal the inverse model's action (no exploration, no Nelder-Mead, no learning) is
+executed in the evaluator's OWN environment instance, so that evaluation neither counts as a
+movement nor disturbs the training world's state or random stream.  Distances are Euclidean in
+outcome units; a failed execution is reported in ``failed`` and counted at ``failure_distance``
+(the diagonal of [-1, 1]^2 by default: worse than any real outcome) in the mean.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .competence import diagonal
+from .environment import Environment, is_success
+
+
+@dataclass(frozen=True)
+class EvaluationResult:
+    mean_distance: float
+    distances: np.ndarray  # (N,)
+    failed: np.ndarray  # (N,) bool
+
+    def to_dict(self) -> dict:
+        return {"mean_distance": self.mean_distance,
+                "distances": [float(d) for d in self.distances],
+                "n_failed": int(self.failed.sum())}
+
+
+class Evaluator:
+    """Holds the benchmark goals and its own environment."""
+
+    def __init__(self, env: Environment, goals: np.ndarray,
+                 failure_distance: float | None = None) -> None:
+        self.env = env
+        self.goals = np.asarray(goals, dtype=float)
+        self.failure_distance = (diagonal(self.goals.shape[1]) if failure_distance is None
+                                 else failure_distance)
+
+    def evaluate(self, inverse: Callable[[np.ndarray], np.ndarray]) -> EvaluationResult:
+        """``inverse`` maps a goal to an action (e.g. ``learner.inverse``)."""
+        dist = np.empty(len(self.goals))
+        failed = np.zeros(len(self.goals), dtype=bool)
+        for i, goal in enumerate(self.goals):
+            result = self.env.execute(np.asarray(inverse(goal), dtype=float))
+            if is_success(result):
+                dist[i] = np.linalg.norm(np.asarray(result.outcome, dtype=float) - goal)
+            else:
+                failed[i] = True
+                dist[i] = self.failure_distance
+        return EvaluationResult(float(dist.mean()), dist, failed)

@@ -1,0 +1,195 @@
+"""The four learners as compositions of the core parts, driven movement by movement.
+
+API shared by all learners (what a ROS node calls):
+  ``next_action() -> (action, process_label)``  the next movement to execute;
+  ``observe(action, result)``                   its result (``.outcome``, ``.status``);
+  ``on_demonstration(action, outcome)``         a teacher's demonstration (social part);
+  ``inverse(goal)``                             the inverse model, for the evaluator.
+Successful movements are stored in memory; failed ones count as movements but are not stored.
+
+- "sgim-d":    SAGG-RIAC goal babbling + demonstrations: each demonstration is stored as own
+               experience, then imitated ``imitation_count`` times; its outcome becomes an
+               attempted goal whose competence (best imitation) feeds the region tree.
+- "saggriac":  SAGG-RIAC goal babbling; demonstrations are ignored.
+- "demo-only": always a small variation of the latest demonstration (random actions before
+               the first one).
+- "random":    uniform random actions; demonstrations are ignored.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+
+from .competence import OUTCOME_HIGH, OUTCOME_LOW, competence, origin_vector
+from .config import LearnerConfig
+from .environment import ResultLike, is_success
+from .goal_reaching import GoalAttempt
+from .goal_selection import GoalSelector
+from .imitation import IMITATION, Imitation, perturb
+from .inverse_model import InverseModel
+from .memory import Memory
+from .region_tree import RegionTree
+
+RANDOM = "random"
+DEMONSTRATION = "demonstration"
+LEARNER_NAMES = ("sgim-d", "saggriac", "demo-only", "random")
+
+
+class Learner:
+    """Common parts: memory, inverse model, movement counter."""
+
+    name = "base"
+    social = False
+
+    def __init__(self, action_dim: int, outcome_dim: int, rng: np.random.Generator,
+                 config: LearnerConfig | None = None) -> None:
+        self.config = config or LearnerConfig()
+        self.action_dim = action_dim
+        self.outcome_dim = outcome_dim
+        self.rng = rng
+        c = self.config
+        self.memory = Memory(action_dim, outcome_dim, c.memory_rebuild_fraction,
+                             c.memory_min_tail, c.memory_max_tail)
+        self.inverse_model = InverseModel(self.memory, c.l_max, c.k_max, c.alpha,
+                                          c.interpolation_sigma)
+        self.n_movements = 0
+        self.n_failures = 0
+
+    def next_action(self) -> tuple[np.ndarray, str]:
+        raise NotImplementedError
+
+    def observe(self, action: np.ndarray, result: ResultLike) -> None:
+        self.n_movements += 1
+        if is_success(result):
+            self.memory.add(np.asarray(action, dtype=float),
+                            np.asarray(result.outcome, dtype=float), self._last_label)
+        else:
+            self.n_failures += 1
+        self._after_observe(action, result)
+
+    def _after_observe(self, action: np.ndarray, result: ResultLike) -> None:
+        pass
+
+    def on_demonstration(self, action: np.ndarray, outcome: np.ndarray) -> None:
+        """Ignored by non-social learners."""
+
+    def inverse(self, goal: np.ndarray) -> np.ndarray:
+        """Inverse model's action; the centre of the action space when memory is empty."""
+        a = self.inverse_model(goal)
+        return np.zeros(self.action_dim) if a is None else a
+
+    def reached_outcomes(self) -> np.ndarray:
+        return self.memory.outcomes
+
+    _last_label = ""
+
+
+class RandomLearner(Learner):
+    name = "random"
+
+    def next_action(self) -> tuple[np.ndarray, str]:
+        self._last_label = RANDOM
+        return self.rng.uniform(-1.0, 1.0, self.action_dim), RANDOM
+
+
+class DemoOnlyLearner(Learner):
+    name = "demo-only"
+    social = True
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.latest_demo: np.ndarray | None = None
+
+    def on_demonstration(self, action: np.ndarray, outcome: np.ndarray) -> None:
+        self.latest_demo = np.asarray(action, dtype=float).copy()
+        self.memory.add(self.latest_demo, np.asarray(outcome, dtype=float), DEMONSTRATION)
+
+    def next_action(self) -> tuple[np.ndarray, str]:
+        if self.latest_demo is None:
+            self._last_label = RANDOM
+            return self.rng.uniform(-1.0, 1.0, self.action_dim), RANDOM
+        self._last_label = IMITATION
+        return perturb(self.latest_demo, self.config.imitation_epsilon, self.rng), IMITATION
+
+
+class GoalBabblingLearner(Learner):
+    """SAGG-RIAC; with ``social=True`` it is SGIM-D."""
+
+    name = "saggriac"
+
+    def __init__(self, action_dim: int, outcome_dim: int, rng: np.random.Generator,
+                 config: LearnerConfig | None = None, social: bool = False) -> None:
+        super().__init__(action_dim, outcome_dim, rng, config)
+        c = self.config
+        self.social = social
+        self.name = "sgim-d" if social else "saggriac"
+        self.origin = origin_vector(c.origin, outcome_dim)
+        self.tree = RegionTree(np.full(outcome_dim, OUTCOME_LOW),
+                               np.full(outcome_dim, OUTCOME_HIGH), c.max_goals_per_region,
+                               c.zeta, c.min_goals_per_child, c.min_region_width)
+        self.selector = GoalSelector(self.tree, (c.p_mode1, c.p_mode2, c.p_mode3),
+                                     c.mode3_radius)
+        self.process: GoalAttempt | Imitation | None = None
+        self.pending_demos: deque[tuple[np.ndarray, np.ndarray]] = deque()
+        self.last_goal_mode = 0
+        self.n_goals = 0
+
+    def on_demonstration(self, action: np.ndarray, outcome: np.ndarray) -> None:
+        if not self.social:
+            return
+        a = np.asarray(action, dtype=float).copy()
+        y = np.asarray(outcome, dtype=float).copy()
+        self.memory.add(a, y, DEMONSTRATION)
+        self.pending_demos.append((a, y))
+
+    def _new_process(self) -> GoalAttempt | Imitation:
+        c = self.config
+        if self.pending_demos:
+            a, y = self.pending_demos.popleft()
+            if c.imitation_count > 0:
+                return Imitation(a, y, c.imitation_count, c.imitation_epsilon, self.rng)
+        choice = self.selector.sample(self.rng)
+        self.last_goal_mode = choice.mode
+        return GoalAttempt(choice.goal, self.memory, self.inverse_model, c, self.rng,
+                           self.action_dim)
+
+    def next_action(self) -> tuple[np.ndarray, str]:
+        if self.process is None or self.process.done:
+            self.process = self._new_process()
+        action, label = self.process.next_action()
+        self._last_label = label
+        return action, label
+
+    def _after_observe(self, action: np.ndarray, result: ResultLike) -> None:
+        p = self.process
+        if p is None:
+            return
+        p.observe(action, result)
+        if p.done:
+            self._record_competence(p.goal, p.best_outcome)
+
+    def _record_competence(self, goal: np.ndarray, best_outcome: np.ndarray | None) -> float:
+        """Competence of the attempt from its closest outcome (-1 if every movement failed)."""
+        if best_outcome is None:
+            comp = -1.0
+        else:
+            comp = competence(goal, best_outcome, self.origin, self.config.eps_sim)
+        self.tree.add(goal, comp)
+        self.n_goals += 1
+        return comp
+
+
+def make_learner(name: str, action_dim: int, outcome_dim: int, rng: np.random.Generator,
+                 config: LearnerConfig | None = None) -> Learner:
+    """Build one of LEARNER_NAMES."""
+    if name == "sgim-d":
+        return GoalBabblingLearner(action_dim, outcome_dim, rng, config, social=True)
+    if name == "saggriac":
+        return GoalBabblingLearner(action_dim, outcome_dim, rng, config, social=False)
+    if name == "demo-only":
+        return DemoOnlyLearner(action_dim, outcome_dim, rng, config)
+    if name == "random":
+        return RandomLearner(action_dim, outcome_dim, rng, config)
+    raise ValueError(f"unknown learner {name!r}; choose one of {LEARNER_NAMES}")

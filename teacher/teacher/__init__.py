@@ -1,0 +1,1 @@
+"""teacher: the automatic teacher of SGIM-D (its ROS node lives beside ``teaching``)."""

@@ -1,0 +1,61 @@
+"""Memory nearest neighbours equal brute force across index rebuilds, and are fast."""
+
+import time
+
+import numpy as np
+
+from sgim_nodes.core.memory import Memory
+
+
+def _brute(outcomes, q, k):
+    d = np.linalg.norm(outcomes - q, axis=1)
+    return np.sort(d)[:k]
+
+
+def test_nearest_matches_brute_force_while_growing():
+    rng = np.random.default_rng(0)
+    mem = Memory(3, 2, rebuild_fraction=0.5, min_tail=16)
+    assert len(mem) == 0 and mem.closest_distance(np.zeros(2)) == float("inf")
+    checked = 0
+    for n in range(1, 1500):
+        mem.add(rng.uniform(-1, 1, 3), rng.uniform(-1, 1, 2), "random")
+        if n in (1, 2, 5, 17, 40, 100, 333, 777, 1499):
+            for q in rng.uniform(-1.2, 1.2, (5, 2)):
+                for k in (1, 3, 10):
+                    d, i = mem.nearest(q, k)
+                    assert len(d) == min(k, n)
+                    assert np.allclose(d, _brute(mem.outcomes, q, k))
+                    assert np.allclose(np.linalg.norm(mem.outcomes[i] - q, axis=1), d)
+                    checked += 1
+    assert checked == 9 * 5 * 3
+    assert 1 < mem.n_rebuilds < 30  # geometric rebuilds, not one per insert
+    # batched queries agree with single ones
+    qs = rng.uniform(-1, 1, (4, 2))
+    d_b, i_b = mem.nearest(qs, 5)
+    for j, q in enumerate(qs):
+        d_s, i_s = mem.nearest(q, 5)
+        assert np.array_equal(i_b[j], i_s) and np.allclose(d_b[j], d_s)
+
+
+def test_actions_and_labels_are_kept_in_order():
+    mem = Memory(2, 2, capacity=2)  # forces the arrays to grow
+    for j in range(5):
+        mem.add(np.array([j, -j]), np.array([0.1 * j, 0.0]), f"l{j}")
+    assert mem.actions[:, 0].tolist() == [0, 1, 2, 3, 4]
+    assert mem.labels == ["l0", "l1", "l2", "l3", "l4"]
+    _, i = mem.nearest(np.array([0.29, 0.0]), 2)
+    assert i.tolist() == [3, 2]
+
+
+def test_query_time_at_10000_pairs_under_1ms():
+    rng = np.random.default_rng(1)
+    mem = Memory(24, 2)
+    for _ in range(10000):
+        mem.add(rng.uniform(-1, 1, 24), rng.uniform(-1, 1, 2))
+    qs = rng.uniform(-1, 1, (300, 2))
+    times = []
+    for q in qs:
+        t = time.perf_counter()
+        mem.nearest(q, 10)
+        times.append(time.perf_counter() - t)
+    assert np.median(times) < 1e-3
