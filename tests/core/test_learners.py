@@ -25,7 +25,7 @@ def _drive(learner, world, n):
 @pytest.mark.parametrize("name", LEARNER_NAMES)
 def test_failed_movements_count_but_are_not_stored(name):
     world = FlakyWorld(PlanarArm(seed=0), every=3)
-    learner = make_learner(name, 12, 2, np.random.default_rng(0))
+    learner = make_learner(name, 12, 2, 0)
     labels = _drive(learner, world, 300)
     assert set(labels) <= LABELS
     assert learner.n_movements == 300 and learner.n_failures == 100
@@ -33,7 +33,7 @@ def test_failed_movements_count_but_are_not_stored(name):
 
 
 def test_goal_babbling_uses_both_processes_and_feeds_the_tree():
-    learner = make_learner("saggriac", 12, 2, np.random.default_rng(1))
+    learner = make_learner("saggriac", 12, 2, 1)
     labels = _drive(learner, PlanarArm(seed=1), 800)
     assert {"goal_directed", "exploration"} <= set(labels)
     assert learner.n_goals > 800 / LearnerConfig().goal_budget
@@ -43,7 +43,7 @@ def test_goal_babbling_uses_both_processes_and_feeds_the_tree():
 
 def test_sgimd_stores_and_imitates_a_demonstration():
     cfg = LearnerConfig(imitation_count=4, imitation_epsilon=0.1)
-    learner = make_learner("sgim-d", 12, 2, np.random.default_rng(2), cfg)
+    learner = make_learner("sgim-d", 12, 2, 2, cfg)
     arm = PlanarArm(seed=2)
     demo_a = np.full(12, 0.3)
     demo_y = arm.forward(demo_a)
@@ -63,14 +63,14 @@ def test_sgimd_stores_and_imitates_a_demonstration():
 
 def test_non_social_learners_ignore_demonstrations():
     for name in ("saggriac", "random"):
-        learner = make_learner(name, 12, 2, np.random.default_rng(0))
+        learner = make_learner(name, 12, 2, 0)
         learner.on_demonstration(np.zeros(12), np.array([1.0, 0.0]))
         assert len(learner.memory) == 0
 
 
 def test_demo_only_varies_the_latest_demonstration():
     cfg = LearnerConfig(imitation_epsilon=0.05)
-    learner = make_learner("demo-only", 12, 2, np.random.default_rng(3), cfg)
+    learner = make_learner("demo-only", 12, 2, 3, cfg)
     arm = PlanarArm()
     assert learner.next_action()[1] == "random"  # nothing to imitate yet
     for demo in (np.full(12, -0.5), np.full(12, 0.5)):
@@ -83,7 +83,7 @@ def test_demo_only_varies_the_latest_demonstration():
 @pytest.mark.parametrize("name", LEARNER_NAMES)
 def test_same_seed_same_run(name):
     def actions(seed):
-        learner = make_learner(name, 12, 2, np.random.default_rng(seed))
+        learner = make_learner(name, 12, 2, seed)
         world = PlanarArm(seed=seed, noise=0.02)
         if learner.social:
             learner.on_demonstration(np.full(12, 0.2), np.array([0.5, 0.5]))
@@ -106,9 +106,8 @@ def test_saggriac_beats_random_on_the_planar_arm():
         for name in LEARNER_NAMES:
             w = World(world.env.__class__(seed=seed), world.eval_env, world.goals,
                       world.teaching_actions, world.teaching_outcomes)
-            rng = np.random.default_rng(seed)
-            learner = make_learner(name, 12, 2, np.random.default_rng(rng.integers(2**63)))
-            means = run(learner, w, 1200, 0, rng, lambda r: None)
+            learner = make_learner(name, 12, 2, seed)
+            means = run(learner, w, 1200, 0, seed, lambda r: None)
             finals.setdefault(name, []).append(means[-1])
     sag, rnd = np.array(finals["saggriac"]), np.array(finals["random"])
     assert np.all(sag < rnd), finals

@@ -30,6 +30,7 @@ from .goal_selection import GoalSelector
 from .imitation import IMITATION, Imitation, perturb
 from .inverse_model import InverseModel
 from .memory import Memory
+from .random_streams import RandomStreams
 from .region_tree import RegionTree
 
 RANDOM = "random"
@@ -43,12 +44,12 @@ class Learner:
     name = "base"
     social = False
 
-    def __init__(self, action_dim: int, outcome_dim: int, rng: np.random.Generator,
+    def __init__(self, action_dim: int, outcome_dim: int, seed: int,
                  config: LearnerConfig | None = None) -> None:
         self.config = config or LearnerConfig()
         self.action_dim = action_dim
         self.outcome_dim = outcome_dim
-        self.rng = rng
+        self.rngs = RandomStreams.from_seed(seed)
         c = self.config
         self.memory = Memory(action_dim, outcome_dim, c.memory_rebuild_fraction,
                              c.memory_min_tail, c.memory_max_tail)
@@ -91,7 +92,7 @@ class RandomLearner(Learner):
 
     def next_action(self) -> tuple[np.ndarray, str]:
         self._last_label = RANDOM
-        return self.rng.uniform(-1.0, 1.0, self.action_dim), RANDOM
+        return self.rngs.random.uniform(-1.0, 1.0, self.action_dim), RANDOM
 
 
 class DemoOnlyLearner(Learner):
@@ -109,9 +110,10 @@ class DemoOnlyLearner(Learner):
     def next_action(self) -> tuple[np.ndarray, str]:
         if self.latest_demo is None:
             self._last_label = RANDOM
-            return self.rng.uniform(-1.0, 1.0, self.action_dim), RANDOM
+            return self.rngs.random.uniform(-1.0, 1.0, self.action_dim), RANDOM
         self._last_label = IMITATION
-        return perturb(self.latest_demo, self.config.imitation_epsilon, self.rng), IMITATION
+        return perturb(self.latest_demo, self.config.imitation_epsilon, self.rngs.imitation), (
+            IMITATION)
 
 
 class GoalBabblingLearner(Learner):
@@ -119,9 +121,9 @@ class GoalBabblingLearner(Learner):
 
     name = "saggriac"
 
-    def __init__(self, action_dim: int, outcome_dim: int, rng: np.random.Generator,
+    def __init__(self, action_dim: int, outcome_dim: int, seed: int,
                  config: LearnerConfig | None = None, social: bool = False) -> None:
-        super().__init__(action_dim, outcome_dim, rng, config)
+        super().__init__(action_dim, outcome_dim, seed, config)
         c = self.config
         self.social = social
         self.name = "sgim-d" if social else "saggriac"
@@ -149,10 +151,11 @@ class GoalBabblingLearner(Learner):
         if self.pending_demos:
             a, y = self.pending_demos.popleft()
             if c.imitation_count > 0:
-                return Imitation(a, y, c.imitation_count, c.imitation_epsilon, self.rng)
-        choice = self.selector.sample(self.rng)
+                return Imitation(a, y, c.imitation_count, c.imitation_epsilon,
+                                 self.rngs.imitation)
+        choice = self.selector.sample(self.rngs.goals)
         self.last_goal_mode = choice.mode
-        return GoalAttempt(choice.goal, self.memory, self.inverse_model, c, self.rng,
+        return GoalAttempt(choice.goal, self.memory, self.inverse_model, c, self.rngs.explorer,
                            self.action_dim)
 
     def next_action(self) -> tuple[np.ndarray, str]:
@@ -181,15 +184,15 @@ class GoalBabblingLearner(Learner):
         return comp
 
 
-def make_learner(name: str, action_dim: int, outcome_dim: int, rng: np.random.Generator,
+def make_learner(name: str, action_dim: int, outcome_dim: int, seed: int,
                  config: LearnerConfig | None = None) -> Learner:
-    """Build one of LEARNER_NAMES."""
+    """Build one of LEARNER_NAMES; `seed` fixes every random stream (see random_streams)."""
     if name == "sgim-d":
-        return GoalBabblingLearner(action_dim, outcome_dim, rng, config, social=True)
+        return GoalBabblingLearner(action_dim, outcome_dim, seed, config, social=True)
     if name == "saggriac":
-        return GoalBabblingLearner(action_dim, outcome_dim, rng, config, social=False)
+        return GoalBabblingLearner(action_dim, outcome_dim, seed, config, social=False)
     if name == "demo-only":
-        return DemoOnlyLearner(action_dim, outcome_dim, rng, config)
+        return DemoOnlyLearner(action_dim, outcome_dim, seed, config)
     if name == "random":
-        return RandomLearner(action_dim, outcome_dim, rng, config)
+        return RandomLearner(action_dim, outcome_dim, seed, config)
     raise ValueError(f"unknown learner {name!r}; choose one of {LEARNER_NAMES}")

@@ -27,6 +27,7 @@ from .environment import Environment, is_success
 from .evaluator import Evaluator
 from .learners import LEARNER_NAMES, Learner, make_learner
 from .planar_arm import PlanarArm, benchmark_goals, teaching_set
+from .random_streams import component_rng
 
 ENV_NAMES = ("fishing", "planar-arm")
 EVALUATION = "evaluation"
@@ -72,7 +73,7 @@ def _vec(x: np.ndarray | None) -> list[float] | None:
 
 
 def run(learner: Learner, world: World, movements: int, eval_every: int,
-        rng: np.random.Generator, write: Callable[[dict[str, Any]], None],
+        seed: int, write: Callable[[dict[str, Any]], None],
         teacher_period: int = 150, teacher_tolerance: float = 0.05,
         progress: Callable[[int], None] | None = None) -> list[float]:
     """Drive ``learner`` for ``movements`` movements; returns the evaluation means.
@@ -85,7 +86,7 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
         from teacher.teaching import Teacher  # the teacher package's logic, no ROS
 
         teacher = Teacher(world.teaching_actions, world.teaching_outcomes,
-                          np.random.default_rng(rng.integers(2**63)), teacher_period,
+                          component_rng(seed, "teacher"), teacher_period,
                           teacher_tolerance)
     evaluator = Evaluator(world.eval_env, world.goals)
     means: list[float] = []
@@ -153,7 +154,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parse_args(argv)
     from tqdm import tqdm
 
-    rng = np.random.default_rng(args.seed)
     try:
         world = build_world(args.env, args.seed, args.noise, args.arm_joints)
     except ImportError as e:  # the fishing world lives in sim_bridge (another package)
@@ -161,7 +161,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     config = LearnerConfig()
     learner = make_learner(args.learner, world.env.action_dim, world.env.outcome_dim,
-                           np.random.default_rng(rng.integers(2**63)), config)
+                           args.seed, config)
     args.output.parent.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
     with args.output.open("w") as f, tqdm(total=args.movements, disable=args.quiet,
@@ -175,7 +175,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                "noise": args.noise, "action_dim": world.env.action_dim,
                "outcome_dim": world.env.outcome_dim, "n_goals": len(world.goals),
                "config": config.to_dict()})
-        means = run(learner, world, args.movements, args.eval_every, rng, write,
+        means = run(learner, world, args.movements, args.eval_every, args.seed, write,
                     args.teacher_period, progress=bar.update)
         write({"type": "end", "final_mean_distance": means[-1], "n_memory": len(learner.memory),
                "n_failures": learner.n_failures, "elapsed_s": time.perf_counter() - start})

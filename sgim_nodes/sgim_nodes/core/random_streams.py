@@ -1,0 +1,41 @@
+"""One independent random stream per component of the learner, all derived from the run's seed.
+
+In the node graph each component (goal generator, explorer, imitation, arbiter, teacher) is a
+process of its own with its own generator. Giving every component its own named stream in the
+single-process learner too means both draw exactly the same numbers for the same seed, however
+the processes interleave: this is what lets the graph reproduce a single-process run.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+STREAM_NAMES = ("goals", "explorer", "imitation", "random", "teacher")
+
+
+def component_rng(seed: int, name: str) -> np.random.Generator:
+    """The generator of component `name` for run `seed` (same in every process)."""
+    if name not in STREAM_NAMES:
+        raise ValueError(f"unknown random stream {name!r}; known: {STREAM_NAMES}")
+    if seed < 0:
+        raise ValueError(f"seed must be >= 0, got {seed}")
+    children = np.random.SeedSequence(seed).spawn(len(STREAM_NAMES))
+    return np.random.default_rng(children[STREAM_NAMES.index(name)])
+
+
+@dataclass
+class RandomStreams:
+    """The learner's generators: goal choice, exploration, imitation noise, random actions."""
+
+    goals: np.random.Generator
+    explorer: np.random.Generator
+    imitation: np.random.Generator
+    random: np.random.Generator
+
+    @classmethod
+    def from_seed(cls, seed: int) -> RandomStreams:
+        return cls(
+            *(component_rng(seed, name) for name in ("goals", "explorer", "imitation", "random"))
+        )
