@@ -61,6 +61,28 @@ def test_sgimd_stores_and_imitates_a_demonstration():
     assert learner.next_action()[1] in {"goal_directed", "exploration"}
 
 
+def test_a_demonstration_preempts_the_goal_attempt_at_the_next_movement():
+    cfg = LearnerConfig(imitation_count=2, goal_budget=10)
+    learner = make_learner("sgim-d", 12, 2, 4, cfg)
+    arm = PlanarArm(seed=4)
+    for _ in range(40):  # fill memory so that attempts are multi-movement goal-directed ones
+        a = learner.rngs.random.uniform(-1, 1, 12)
+        learner.memory.add(a, arm.forward(a), "random")
+    while True:  # start an attempt that will last more than one movement
+        a, label = learner.next_action()
+        learner.observe(a, arm.execute(a))
+        if label == "goal_directed" and not learner.process.done:
+            break
+    goals_before, interrupted = learner.n_goals, learner.process
+    demo = np.full(12, 0.2)
+    learner.on_demonstration(demo, arm.forward(demo))
+    a, label = learner.next_action()
+    assert label == "imitation"  # no further movement spent on the interrupted goal
+    assert learner.n_goals == goals_before + 1  # its competence still counts
+    leaf_goals = [g for r in learner.tree.leaves for g in r.goals]
+    assert any(np.array_equal(g, np.clip(interrupted.goal, -1, 1)) for g in leaf_goals)
+
+
 def test_non_social_learners_ignore_demonstrations():
     for name in ("saggriac", "random"):
         learner = make_learner(name, 12, 2, 0)

@@ -8,7 +8,8 @@ API shared by all learners (what a ROS node calls):
 Successful movements are stored in memory; failed ones count as movements but are not stored.
 
 - "sgim-d":    SAGG-RIAC goal babbling + demonstrations: each demonstration is stored as own
-               experience, then imitated ``imitation_count`` times; its outcome becomes an
+               experience, interrupts the goal attempt under way at the next movement
+               boundary, then is imitated ``imitation_count`` times; its outcome becomes an
                attempted goal whose competence (best imitation) feeds the region tree.
 - "saggriac":  SAGG-RIAC goal babbling; demonstrations are ignored.
 - "demo-only": always a small variation of the latest demonstration (random actions before
@@ -159,11 +160,21 @@ class GoalBabblingLearner(Learner):
                            self.action_dim)
 
     def next_action(self) -> tuple[np.ndarray, str]:
+        if self.pending_demos and isinstance(self.process, GoalAttempt) and not self.process.done:
+            self._interrupt()
         if self.process is None or self.process.done:
             self.process = self._new_process()
         action, label = self.process.next_action()
         self._last_label = label
         return action, label
+
+    def _interrupt(self) -> None:
+        """A demonstration preempts the goal attempt at this movement boundary (as the graph's
+        arbiter cancels the explorer's job): the goal's competence is what it reached so far."""
+        attempt = self.process
+        if attempt.movements > 0:
+            self._record_competence(attempt.goal, attempt.best_outcome)
+        self.process = None
 
     def _after_observe(self, action: np.ndarray, result: ResultLike) -> None:
         p = self.process
