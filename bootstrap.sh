@@ -43,7 +43,7 @@ command -v cmake >/dev/null 2>&1 ||
 fingerprint() {
   (cd "$REPO" && find "$@" -type f \( -name package.xml -o -name setup.py -o -name setup.cfg \
       -o -name CMakeLists.txt -o -name '*.msg' -o -name '*.srv' -o -name '*.action' \
-      -o -path '*/config/*.yaml' -o -path '*/resource/*' -o -path 'sgim_msgs/sgim_ros/*.py' \) -print0 2>/dev/null |
+      -o -path '*/data/*.npz' -o -path '*/config/*.yaml' -o -path '*/resource/*' -o -path 'sgim_msgs/sgim_ros/*.py' \) -print0 2>/dev/null |
     sort -z | xargs -0 sha256sum) | sha256sum | cut -c1-16
 }
 REQ_STAMP="$VENV/.sgim-requirements"

@@ -10,12 +10,12 @@ setup(
     name=PACKAGE,
     version="0.1.0",
     packages=find_packages(exclude=["test", "tests"]),
-    # The benchmark and teaching sets travel with the module that loads them.
-    package_data={PACKAGE: ["data/*", "urdf/*"]},
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
         (f"share/{PACKAGE}/config", glob("config/*.yaml")),
+        # The reachable map, benchmark goals and teaching set (data_files.data_dir finds them).
+        (f"share/{PACKAGE}/data", glob("data/*.npz")),
     ],
     install_requires=["setuptools"],
     zip_safe=False,

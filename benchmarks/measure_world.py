@@ -1,0 +1,147 @@
+"""Measure how hard and how learnable the fishing world is (figures quoted in README_world.md).
+
+Why: the world must pose the paper's problem (redundant, noisy, with a natural landing zone and
+rarely reached regions) yet stay learnable (small action changes move the landing point a little,
+and the time step does not decide where it lands). Every figure is in normalised outcome units.
+
+    .venv/bin/python benchmarks/measure_world.py --casts 3000
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from sim_bridge.fishing_world import FishingWorld, Status
+
+
+def ok_outcomes(world: FishingWorld, actions: np.ndarray) -> np.ndarray:
+    """Outcomes (n, 2), NaN rows where the cast did not land."""
+    out = np.full((len(actions), 2), np.nan)
+    for i, a in enumerate(actions):
+        r = world.execute(a)
+        if r.status == Status.OK:
+            out[i] = r.outcome
+    return out
+
+
+def sensitivity(n_actions: int, delta: float, seed: int) -> np.ndarray:
+    """Landing shift when one action number changes by ``delta`` (noise-free), all 24 numbers."""
+    rng = np.random.default_rng(seed)
+    world = FishingWorld(seed=seed, noise=0.0)
+    shifts = []
+    for a in rng.uniform(-1, 1, (n_actions, world.action_dim)):
+        base = ok_outcomes(world, a[None])[0]
+        moved = []
+        for d in range(world.action_dim):
+            b = a.copy()
+            b[d] += delta if b[d] + delta <= 1.0 else -delta
+            moved.append(b)
+        out = ok_outcomes(world, np.array(moved))
+        shifts.extend(np.linalg.norm(out - base, axis=1))
+    s = np.array(shifts)
+    return s[np.isfinite(s)]
+
+
+def dt_halving(n_actions: int, seed: int, dt: float = 1 / 240) -> np.ndarray:
+    """Landing shift between time step ``dt`` and ``dt / 2`` (noise-free)."""
+    acts = np.random.default_rng(seed).uniform(-1, 1, (n_actions, 24))
+    a = ok_outcomes(FishingWorld(seed=seed, noise=0.0, time_step=dt), acts)
+    b = ok_outcomes(FishingWorld(seed=seed, noise=0.0, time_step=dt / 2), acts)
+    s = np.linalg.norm(a - b, axis=1)
+    return s[np.isfinite(s)]
+
+
+def paper_noise(n_actions: int = 20, repeats: int = 10, seed: int = 0,
+                noise: float | None = None) -> float:
+    """The paper's protocol: mean over actions of the mean distance of attempts to their mean."""
+    rng = np.random.default_rng(seed + 1)
+    world = FishingWorld(seed=seed) if noise is None else FishingWorld(seed=seed, noise=noise)
+    spreads = []
+    for a in rng.uniform(-1, 1, (n_actions, world.action_dim)):
+        out = ok_outcomes(world, np.repeat(a[None], repeats, axis=0))
+        out = out[np.isfinite(out[:, 0])]
+        if len(out) >= 2:
+            spreads.append(np.mean(np.linalg.norm(out - out.mean(axis=0), axis=1)))
+    return float(np.mean(spreads))
+
+
+def pile_up(points: np.ndarray, radius: float = 0.2) -> tuple[np.ndarray, float]:
+    """Densest point (the most crowded radius-ball among the casts) and its share of casts."""
+    sub = points[:: max(1, len(points) // 2000)]
+    d = np.linalg.norm(sub[:, None, :] - points[None, :, :], axis=2)
+    counts = (d < radius).sum(axis=1)
+    best = int(np.argmax(counts))
+    return sub[best], counts[best] / len(points)
+
+
+def rare_cells(points: np.ndarray, reachable: np.ndarray, nx: int = 26, ny: int = 16,
+               share: float = 0.1) -> tuple[float, int]:
+    """Share of casts landing in the rarest ``share`` of the grid cells that hold reached points."""
+    def cells(p: np.ndarray) -> np.ndarray:
+        ix = np.clip(((p[:, 0] + 1) / 2 * nx).astype(int), 0, nx - 1)
+        iy = np.clip(((p[:, 1] + 1) / 2 * ny).astype(int), 0, ny - 1)
+        return ix * ny + iy
+    reach = np.unique(cells(reachable))
+    counts = np.bincount(cells(points), minlength=nx * ny)[reach]
+    k = max(1, round(share * len(reach)))
+    rarest = np.argsort(counts, kind="stable")[:k]
+    return counts[rarest].sum() / len(points), k
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--casts", type=int, default=3000, help="random casts for the histogram")
+    parser.add_argument("--sens-actions", type=int, default=20, help="actions x 24 perturbations")
+    parser.add_argument("--dt-actions", type=int, default=100, help="actions for dt halving")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--reachable", default=None,
+                        help="reachable map .npz (default: sim_bridge/data/reachable_map.npz)")
+    parser.add_argument("--png", default="docs/figures/sim_random_casts.png")
+    args = parser.parse_args(argv)
+    t0 = time.perf_counter()
+    s = sensitivity(args.sens_actions, 1e-3, args.seed)
+    print(f"sensitivity (1e-3 on one action number, {len(s)} pairs): median {np.median(s):.4f}, "
+          f"p90 {np.percentile(s, 90):.4f}, max {s.max():.3f}")
+    h = dt_halving(args.dt_actions, args.seed)
+    print(f"dt 1/240 -> 1/480 ({len(h)} actions): median {np.median(h):.4f}, "
+          f"p90 {np.percentile(h, 90):.4f}, max {h.max():.3f}")
+    print(f"noise, paper protocol (20 actions x 10 attempts): {paper_noise(seed=args.seed):.4f}")
+    world = FishingWorld(seed=args.seed)
+    acts = np.random.default_rng(args.seed + 7).uniform(-1, 1, (args.casts, 24))
+    out = ok_outcomes(world, acts)
+    landed = np.isfinite(out[:, 0])
+    pts = out[landed]
+    print(f"random casts: {args.casts}, landed {landed.mean():.3f}")
+    centre, share = pile_up(pts)
+    print(f"densest point {np.round(centre, 3).tolist()}: share within 0.2 = {share:.3f}")
+    reach = pts
+    if args.reachable != "none":
+        from sim_bridge.data_files import load_reachable_map
+        try:
+            reach = load_reachable_map(args.reachable)
+        except FileNotFoundError:
+            print("(no reachable map: using these casts as the reachable set)")
+    rare, k = rare_cells(pts, reach)
+    print(f"share of random casts in the {k} rarest reachable 26x16 cells: {rare:.4f}")
+    near = np.linalg.norm(pts - np.array([-0.5, -0.25]), axis=1) < 0.1
+    print(f"share within 0.1 of (-0.5, -0.25): {near.mean():.4f}")
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 5))
+    hist = ax.hist2d(pts[:, 0], pts[:, 1], bins=[52, 32], range=[[-1, 1], [-1, 1]],
+                     cmap="viridis", cmin=1)
+    fig.colorbar(hist[3], ax=ax, label="casts per bin")
+    ax.set(xlabel="outcome x (normalised)", ylabel="outcome y (normalised)",
+           title=f"{len(pts)} random casts (seed {args.seed})")
+    fig.tight_layout()
+    fig.savefig(args.png, dpi=80)
+    print(f"histogram -> {args.png}; {time.perf_counter() - t0:.0f} s")
+
+
+if __name__ == "__main__":
+    main()

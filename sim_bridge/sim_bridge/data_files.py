@@ -1,0 +1,81 @@
+"""Load the world's data files: reachable map, benchmark goals and teaching set.
+
+Why a search path: in the source tree the files sit in ``sim_bridge/data`` next to the package;
+installed by colcon they sit in ``<prefix>/share/sim_bridge/data`` (setup.py ``data_files``), and
+installed as package data in ``sim_bridge/data`` inside the package. Every candidate is a path
+relative to this module (or ``SIM_BRIDGE_DATA_DIR``), so no ROS import and no working directory
+is needed.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+REACHABLE_MAP = "reachable_map.npz"
+BENCHMARK_GOALS = "benchmark_goals.npz"
+TEACHING_SET = "teaching_set.npz"
+
+
+def data_dir() -> Path:
+    """The first existing data directory among the known layouts."""
+    here = Path(__file__).resolve().parent
+    candidates = []
+    if os.environ.get("SIM_BRIDGE_DATA_DIR"):
+        candidates.append(Path(os.environ["SIM_BRIDGE_DATA_DIR"]))
+    candidates += [
+        here / "data",  # package_data layout
+        here.parent / "data",  # source tree: sim_bridge/data
+        *(p / "share" / "sim_bridge" / "data" for p in here.parents),  # colcon install
+    ]
+    for c in candidates:
+        if (c / BENCHMARK_GOALS).is_file() or (c / REACHABLE_MAP).is_file():
+            return c
+    raise FileNotFoundError(f"no sim_bridge data directory among {[str(c) for c in candidates]}")
+
+
+def _path(name: str, path: str | os.PathLike[str] | None) -> Path:
+    return Path(path) if path is not None else data_dir() / name
+
+
+@dataclass(frozen=True)
+class TeachingSet:
+    """Demonstrations: the most repeatable recorded action of each coarse cell."""
+
+    actions: np.ndarray  # (M, 24)
+    outcomes: np.ndarray  # (M, 2) mean outcome over the repeats
+    spread: np.ndarray  # (M,) mean distance of the repeats to their mean
+
+
+@dataclass(frozen=True)
+class ReachableMap:
+    """Every landed cast of the mapping run."""
+
+    actions: np.ndarray  # (N, 24) float32
+    outcomes: np.ndarray  # (N, 2) float32, normalised
+
+
+def load_reachable_map(path: str | os.PathLike[str] | None = None) -> np.ndarray:
+    """Reached outcomes (N, 2) of the mapping run."""
+    return load_reachable_casts(path).outcomes
+
+
+def load_reachable_casts(path: str | os.PathLike[str] | None = None) -> ReachableMap:
+    """Actions and outcomes of the mapping run."""
+    with np.load(_path(REACHABLE_MAP, path)) as f:
+        return ReachableMap(actions=f["actions"], outcomes=f["outcomes"])
+
+
+def load_benchmark_goals(path: str | os.PathLike[str] | None = None) -> np.ndarray:
+    """Benchmark goals (N, 2): one per 26 x 16 cell holding reached points."""
+    with np.load(_path(BENCHMARK_GOALS, path)) as f:
+        return f["goals"]
+
+
+def load_teaching_set(path: str | os.PathLike[str] | None = None) -> TeachingSet:
+    """The teacher's demonstrations."""
+    with np.load(_path(TEACHING_SET, path)) as f:
+        return TeachingSet(actions=f["actions"], outcomes=f["outcomes"], spread=f["spread"])

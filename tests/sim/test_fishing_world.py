@@ -1,0 +1,121 @@
+"""The world: validation, determinism, noise level, learnability bounds (cheap samples)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from sim_bridge.fishing_world import (
+    AIR_DRAG,
+    GRAVITY,
+    FishingWorld,
+    Status,
+    free_flight_touch,
+)
+
+
+@pytest.fixture(scope="module")
+def actions() -> np.ndarray:
+    return np.random.default_rng(123).uniform(-1, 1, (8, 24))
+
+
+def outcomes(world: FishingWorld, acts: np.ndarray) -> np.ndarray:
+    out = np.full((len(acts), 2), np.nan)
+    for i, a in enumerate(acts):
+        r = world.execute(a)
+        if r.status == Status.OK:
+            out[i] = r.outcome
+    return out
+
+
+@pytest.mark.parametrize("bad", [
+    np.zeros(23), np.zeros(25), np.zeros((2, 12)), np.full(24, np.nan),
+    np.r_[np.zeros(23), np.inf], np.r_[np.zeros(23), -np.inf], np.r_[np.zeros(23), 1.0001],
+    np.r_[-1.5, np.zeros(23)], "not an action", None,
+])
+def test_bad_actions_are_rejected(bad: object) -> None:
+    with FishingWorld(seed=0) as w:
+        r = w.execute(bad)  # type: ignore[arg-type]
+        assert r.status == Status.INVALID_ACTION
+        assert r.outcome is None and r.message
+
+
+def test_same_seed_same_outcomes_bit_for_bit(actions: np.ndarray) -> None:
+    with FishingWorld(seed=7) as a, FishingWorld(seed=7) as b:
+        oa, ob = outcomes(a, actions), outcomes(b, actions)
+    assert np.isfinite(oa).all()
+    assert oa.tobytes() == ob.tobytes()
+
+
+def test_different_seeds_differ(actions: np.ndarray) -> None:
+    with FishingWorld(seed=1) as a, FishingWorld(seed=2) as b:
+        assert not np.array_equal(outcomes(a, actions), outcomes(b, actions))
+
+
+def test_outcomes_in_range_and_fields(actions: np.ndarray) -> None:
+    with FishingWorld(seed=0) as w:
+        for a in actions:
+            r = w.execute(a)
+            assert r.status == Status.OK
+            assert np.all(np.abs(r.outcome) <= 1.0)
+            assert 0.0 < r.touch_time < 4.0 and r.world_point.shape == (2,)
+
+
+def test_noise_level_paper_protocol_few_repeats() -> None:
+    """The paper's protocol (20 x 10 gave 0.073) with 10 actions x 5 attempts, wide bounds."""
+    rng = np.random.default_rng(5)
+    spreads = []
+    with FishingWorld(seed=3) as w:
+        for a in rng.uniform(-1, 1, (10, 24)):
+            o = outcomes(w, np.repeat(a[None], 5, axis=0))
+            spreads.append(np.mean(np.linalg.norm(o - o.mean(axis=0), axis=1)))
+    assert 0.02 < np.mean(spreads) < 0.15
+
+
+def test_noise_free_world_repeats_exactly(actions: np.ndarray) -> None:
+    with FishingWorld(seed=0, noise=0.0) as w:
+        first = outcomes(w, actions[:3])
+        again = outcomes(w, actions[:3])
+    assert first.tobytes() == again.tobytes()
+
+
+def test_sensitivity_to_small_action_change(actions: np.ndarray) -> None:
+    """A 1e-3 change of one action number: README bound median < 0.01, p90 < 0.05."""
+    shifts = []
+    with FishingWorld(seed=0, noise=0.0) as w:
+        for a in actions[:2]:
+            base = outcomes(w, a[None])[0]
+            for d in range(24):
+                b = a.copy()
+                b[d] += 1e-3 if b[d] < 0.999 else -1e-3
+                shifts.append(np.linalg.norm(outcomes(w, b[None])[0] - base))
+    assert np.median(shifts) < 0.01
+    assert np.percentile(shifts, 90) < 0.05
+
+
+def test_halving_the_time_step_moves_little(actions: np.ndarray) -> None:
+    """README bound: median shift < 0.06 between dt = 1/240 and 1/480 (measured 0.027)."""
+    with FishingWorld(seed=0, noise=0.0) as a, FishingWorld(seed=0, noise=0.0,
+                                                           time_step=1 / 480) as b:
+        d = np.linalg.norm(outcomes(a, actions) - outcomes(b, actions), axis=1)
+    assert np.median(d) < 0.06
+
+
+def test_free_flight_matches_numerical_integration() -> None:
+    pos, vel = np.array([0.5, -0.2, 1.0]), np.array([4.0, 1.0, 3.0])
+    t, xy = free_flight_touch(pos, vel, -2.0, AIR_DRAG, GRAVITY, 10.0)
+    p, v, dt, s = pos.copy(), vel.copy(), 1e-5, 0.0
+    while p[2] > -2.0:
+        v = v + dt * (np.array([0, 0, -GRAVITY]) - AIR_DRAG * v)
+        p, s = p + dt * v, s + dt
+    assert math.isclose(t, s, abs_tol=1e-3)
+    np.testing.assert_allclose(xy, p[:2], atol=2e-3)
+
+
+def test_hook_never_starts_under_water() -> None:
+    """Water is below the lowest start posture: no cast fails before it begins."""
+    rng = np.random.default_rng(9)
+    with FishingWorld(seed=0) as w:
+        for a in rng.uniform(-1, 1, (30, 24)):
+            a[0::4] = rng.choice([-1.0, 1.0], 6)  # extreme start postures
+            assert w.execute(a).status != Status.PHYSICS_FAILURE
