@@ -24,6 +24,15 @@ setup(
     entry_points={
         "console_scripts": [
             "learn = sgim_nodes.core.runner:main",
+            "interest_computer = sgim_nodes.interest_computer_node:main",
+            "goal_generator = sgim_nodes.goal_generator_node:main",
+            "low_level_explorer = sgim_nodes.low_level_explorer_node:main",
+            "imitation = sgim_nodes.imitation_node:main",
+            "social_interaction = sgim_nodes.social_interaction_node:main",
+            "evaluator = sgim_nodes.evaluator_node:main",
+            "recorder = sgim_nodes.recorder_node:main",
+            "replay = sgim_nodes.replay:main",
+            "rebuild = sgim_nodes.rebuild:main",
         ],
     },
 )

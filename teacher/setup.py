@@ -21,5 +21,10 @@ setup(
     maintainer_email="maintainers@sgim-ros.org",
     description="Automatic and human teachers for SGIM-D.",
     license="Apache-2.0",
-    entry_points={"console_scripts": []},
+    entry_points={
+        "console_scripts": [
+            "teacher = teacher.teacher_node:main",
+            "human_input = teacher.human_input_node:main",
+        ],
+    },
 )

@@ -1,0 +1,417 @@
+"""The human teacher's command language, without ROS: parsing, validation and decisions.
+
+Kept free of rclpy so that every bad-input case is unit-tested in milliseconds; the node only
+feeds it what it hears (movements, evaluations), sends what it decides and prints its text.
+A person at a terminal types anything: every mistake becomes a ``CommandError`` whose message
+names the problem, never a traceback.
+
+Commands (``help`` prints this list):
+  list          teaching-set goals the learner has not reached within the tolerance, numbered
+  status        latest evaluation error, movement count, demonstrations given
+  teach N       send teaching-set entry N as a demonstration
+  goal X Y      send the library's most reliable (action, outcome) pair for the goal (X, Y)
+  yaml FILE     send the 24 action parameters of FILE; the outcome comes from executing them
+                once through the simulator's execute_action service with record=false (not a
+                learner movement), so a person never has to guess it; an ``outcome: [x, y]``
+                in the file is only a fallback for when that service is not available
+  help, quit
+
+Why ``goal`` sends a stored pair and not the inverse model's interpolated action: a
+demonstration must carry the outcome its action produces, and only stored pairs have a known
+one. The library is the teaching set plus the learner's landed movements, so the reply states
+which of the two the pair came from.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+import shlex
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from sgim_nodes.core.config import LearnerConfig
+from sgim_nodes.core.inverse_model import InverseModel
+from sgim_nodes.core.memory import Memory
+from teacher.teaching import Teacher
+
+OUTCOME_SIZE = 2
+# The automatic teacher's default, so that both teachers call the same goals "reached".
+DEFAULT_TOLERANCE: float = inspect.signature(Teacher).parameters["tolerance"].default
+
+HELP = """commands:
+  list          teaching-set goals not reached yet (within the tolerance), with their outcome
+  status        latest evaluation error, movement count, demonstrations given
+  teach N       send teaching-set entry N (see list) as a demonstration
+  goal X Y      send the library's most reliable action for the goal point (X, Y) in [-1, 1]^2
+  yaml FILE     send the action in FILE (a list of 24 numbers in [-1, 1], or `action: [...]`);
+                its outcome is measured by executing it once through execute_action (not
+                recorded); a file's `outcome: [x, y]` is used only if that service is absent
+  help          this list
+  quit          leave (end of input and Ctrl-C also leave)"""
+
+
+class CommandError(ValueError):
+    """A line that cannot be obeyed; the message says why, for the person who typed it."""
+
+
+# --- parsed commands ---------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Help:
+    pass
+
+
+@dataclass(frozen=True)
+class Quit:
+    pass
+
+
+@dataclass(frozen=True)
+class ListGoals:
+    pass
+
+
+@dataclass(frozen=True)
+class Status:
+    pass
+
+
+@dataclass(frozen=True)
+class Teach:
+    index: int
+
+
+@dataclass(frozen=True)
+class GoalPoint:
+    point: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class YamlFile:
+    path: str
+
+
+Command = Help | Quit | ListGoals | Status | Teach | GoalPoint | YamlFile
+
+_NO_ARGUMENT = {"help": Help, "?": Help, "quit": Quit, "exit": Quit, "list": ListGoals,
+                "status": Status}
+
+
+def parse(line: str) -> Command | None:
+    """One typed line to a command; None for a blank line."""
+    try:
+        words = shlex.split(line)
+    except ValueError as error:  # "No closing quotation"
+        raise CommandError(f"cannot read the line: {error}") from None
+    if not words:
+        return None
+    name, args = words[0].lower(), words[1:]
+    if name in _NO_ARGUMENT:
+        if args:
+            raise CommandError(f"'{name}' takes no arguments, got {len(args)}")
+        return _NO_ARGUMENT[name]()
+    if name == "teach":
+        if len(args) != 1:
+            raise CommandError(f"'teach' needs one teaching-set index (e.g. teach 3), "
+                               f"got {len(args)} values")
+        return Teach(parse_index(args[0]))
+    if name == "goal":
+        if len(args) != OUTCOME_SIZE:
+            raise CommandError(f"'goal' needs {OUTCOME_SIZE} numbers X Y in [-1, 1] "
+                               f"(e.g. goal 0.1 -0.2), got {len(args)} values")
+        return GoalPoint(tuple(parse_unit(a, f"goal {'XY'[i]}") for i, a in enumerate(args)))
+    if name == "yaml":
+        if len(args) != 1:
+            raise CommandError(f"'yaml' needs one file name (quote it if it has spaces), "
+                               f"got {len(args)} values")
+        return YamlFile(args[0])
+    raise CommandError(f"unknown command '{words[0]}': type 'help' for the list")
+
+
+def parse_index(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise CommandError(f"'{text}' is not a whole number") from None
+
+
+def parse_unit(value: Any, what: str) -> float:
+    """A finite number in [-1, 1], from a typed word or a YAML value."""
+    if isinstance(value, bool) or not isinstance(value, int | float | str):
+        raise CommandError(f"{what} is {value!r}, not a number")
+    try:
+        # Strings too: PyYAML reads 1e-3 (no dot) as a string, a person would not guess that.
+        number = float(value)
+    except ValueError:
+        raise CommandError(f"{what} is '{value}', not a number") from None
+    if math.isnan(number):
+        raise CommandError(f"{what} is NaN: a number in [-1, 1] is needed")
+    if math.isinf(number):
+        raise CommandError(f"{what} is infinite: a number in [-1, 1] is needed")
+    if not -1.0 <= number <= 1.0:
+        raise CommandError(f"{what} = {number:g} is outside [-1, 1]")
+    return number
+
+
+# --- what the node has heard ---------------------------------------------------------------
+
+
+@dataclass
+class LearnerState:
+    """The learner as seen from the outside: landed movements, count, latest evaluation."""
+
+    action_size: int
+    movement_count: int = 0
+    evaluation: tuple[int, float] | None = None  # (movement index, mean distance)
+    demonstrations: int = 0  # given by this node
+    listeners: int = 0  # subscribers of the demonstrations topic, as last seen
+    actions: list[np.ndarray] = field(default_factory=list)  # of landed movements
+    outcomes: list[np.ndarray] = field(default_factory=list)
+    indices: list[int] = field(default_factory=list)  # their Movement.index
+
+    def add_movement(self, index: int, landed: bool, action: Any, outcome: Any) -> str | None:
+        """Count a movement; keep it in the library if it landed. Returns a problem, if any."""
+        self.movement_count = max(self.movement_count, int(index))
+        if not landed:
+            return None
+        a, y = np.asarray(action, dtype=float), np.asarray(outcome, dtype=float)
+        if a.shape != (self.action_size,) or y.shape != (OUTCOME_SIZE,):
+            return (f"movement {index} ignored: action size {a.size}, outcome size {y.size} "
+                    f"(expected {self.action_size} and {OUTCOME_SIZE})")
+        if not (np.isfinite(a).all() and np.isfinite(y).all()):
+            return f"movement {index} ignored: it holds non-finite values"
+        self.actions.append(a)
+        self.outcomes.append(y)
+        self.indices.append(int(index))
+        return None
+
+    def reached(self) -> np.ndarray:
+        return np.array(self.outcomes).reshape(-1, OUTCOME_SIZE)
+
+
+# --- decisions -------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Reply:
+    """Only text to print."""
+
+    text: str
+
+
+@dataclass(frozen=True)
+class SendDemonstration:
+    action: np.ndarray
+    outcome: np.ndarray
+    teaching_set_index: int  # -1 when the pair is not a teaching-set entry
+    text: str  # what is sent and why, for the person
+
+
+@dataclass(frozen=True)
+class ExecuteFirst:
+    """The action of a file: its outcome must be measured before it can be demonstrated."""
+
+    action: np.ndarray
+    file_outcome: np.ndarray | None  # used only when the simulator cannot be asked
+    path: str
+
+
+Decision = Reply | SendDemonstration | ExecuteFirst | Quit
+
+
+class TeachingLibrary:
+    """The teaching set, checked once, and the decisions that need it."""
+
+    def __init__(self, actions: Any, outcomes: Any, tolerance: float,
+                 config: LearnerConfig | None = None) -> None:
+        self.actions = np.asarray(actions, dtype=float)
+        self.outcomes = np.asarray(outcomes, dtype=float)
+        if (self.actions.ndim != 2 or self.outcomes.shape != (len(self.actions), OUTCOME_SIZE)
+                or len(self.actions) == 0):
+            raise ValueError(f"teaching set must hold M >= 1 actions (M, A) and outcomes "
+                             f"(M, {OUTCOME_SIZE}); got {self.actions.shape} and "
+                             f"{self.outcomes.shape}")
+        if not (np.isfinite(self.actions).all() and np.isfinite(self.outcomes).all()):
+            raise ValueError("teaching set holds non-finite values")
+        # The automatic teacher's rule for "not reached", so both teachers agree.
+        self.teacher = Teacher(self.actions, self.outcomes, np.random.default_rng(0),
+                               tolerance=tolerance)
+        self.config = config or LearnerConfig()
+
+    @property
+    def action_size(self) -> int:
+        return self.actions.shape[1]
+
+    def decide(self, command: Command, state: LearnerState) -> Decision:
+        """What to do for one command; raises CommandError for impossible requests."""
+        match command:
+            case Help():
+                return Reply(HELP)
+            case Quit():
+                return command
+            case ListGoals():
+                return Reply(self.list_text(state))
+            case Status():
+                return Reply(status_text(state))
+            case Teach(index):
+                return self.teach(index, state)
+            case GoalPoint(point):
+                return self.for_goal(np.array(point), state)
+            case YamlFile(path):
+                action, outcome = load_action_file(path, self.action_size)
+                return ExecuteFirst(action, outcome, path)
+        raise CommandError(f"no handler for {command!r}")  # unreachable: parse makes commands
+
+    def closest_distances(self, state: LearnerState) -> np.ndarray:
+        reached = state.reached()
+        if len(reached) == 0:
+            return np.full(len(self.outcomes), np.inf)
+        diff = self.outcomes[:, None, :] - reached[None, :, :]
+        return np.sqrt((diff**2).sum(-1)).min(1)
+
+    def list_text(self, state: LearnerState) -> str:
+        unreached = self.teacher.unreached(state.reached())
+        total, tol = len(self.outcomes), self.teacher.tolerance
+        if len(unreached) == 0:
+            return f"all {total} teaching goals are reached within {tol:g}"
+        closest = self.closest_distances(state)
+        lines = [f"{len(unreached)} of {total} teaching goals not reached within {tol:g}:"]
+        for i in unreached:
+            far = "nothing reached yet" if np.isinf(closest[i]) else f"closest {closest[i]:.3f}"
+            lines.append(f"  {i:3d}: outcome {fmt(self.outcomes[i])}  ({far})")
+        return "\n".join(lines)
+
+    def teach(self, index: int, state: LearnerState) -> SendDemonstration:
+        total = len(self.actions)
+        if not 0 <= index < total:
+            raise CommandError(f"no teaching-set entry {index}: entries are 0 to {total - 1}")
+        note = ""
+        if index not in self.teacher.unreached(state.reached()):
+            note = " (note: the learner already reached it)"
+        return SendDemonstration(
+            self.actions[index].copy(), self.outcomes[index].copy(), index,
+            f"teaching-set entry {index}, outcome {fmt(self.outcomes[index])}{note}")
+
+    def for_goal(self, goal: np.ndarray, state: LearnerState) -> SendDemonstration:
+        """The inverse model's most reliable candidate in teaching set + learner movements."""
+        memory = Memory(self.action_size, OUTCOME_SIZE)
+        for a, y in zip(self.actions, self.outcomes, strict=True):
+            memory.add(a, y)
+        for a, y in zip(state.actions, state.outcomes, strict=True):
+            memory.add(a, y)
+        c = self.config
+        model = InverseModel(memory, c.l_max, c.k_max, c.alpha, c.interpolation_sigma)
+        estimate = model.estimate(goal)
+        assert estimate is not None  # the teaching set is never empty
+        k = estimate.candidate_index
+        action, outcome = memory.actions[k].copy(), memory.outcomes[k].copy()
+        distance = float(np.linalg.norm(outcome - goal))
+        if k < len(self.actions):
+            source, ts_index = f"teaching-set entry {k}", k
+        else:
+            source, ts_index = f"learner movement {state.indices[k - len(self.actions)]}", -1
+        return SendDemonstration(
+            action, outcome, ts_index,
+            f"for goal {fmt(goal)}: the action of {source}, outcome {fmt(outcome)} "
+            f"({distance:.3f} from the goal, reliability {estimate.reliability:.3f})")
+
+
+def status_text(state: LearnerState) -> str:
+    if state.evaluation is None:
+        error = "no evaluation yet"
+    else:
+        error = f"{state.evaluation[1]:.4f} (at movement {state.evaluation[0]})"
+    return (f"latest evaluation error: {error}\nmovements: {state.movement_count}\n"
+            f"demonstrations given: {state.demonstrations}\n"
+            f"listening to demonstrations: {state.listeners}")
+
+
+def prompt(state: LearnerState) -> str:
+    error = "-" if state.evaluation is None else f"{state.evaluation[1]:.3f}"
+    return (f"[movements {state.movement_count} | error {error} | "
+            f"demos {state.demonstrations}] human> ")
+
+
+def fmt(point: Any) -> str:
+    return "(" + ", ".join(f"{v:+.3f}" for v in np.asarray(point, dtype=float)) + ")"
+
+
+# --- action files --------------------------------------------------------------------------
+
+
+def load_action_file(path: str, action_size: int) -> tuple[np.ndarray, np.ndarray | None]:
+    """(action, optional outcome) from a YAML file.
+
+    Accepted: a list of ``action_size`` numbers, or a mapping with ``action`` (that list) and
+    optionally ``outcome: [x, y]``, used only when the simulator cannot measure it. Unknown
+    keys are refused: a misspelt ``outcome`` must not be silently dropped.
+    """
+    file = Path(path).expanduser()
+    try:
+        text = file.read_text()
+    except FileNotFoundError:
+        raise CommandError(f"no such file: {path}") from None
+    except IsADirectoryError:
+        raise CommandError(f"{path} is a directory, not a YAML file") from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise CommandError(f"cannot read {path}: {error}") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        where = getattr(error, "problem_mark", None)
+        at = f" (line {where.line + 1})" if where is not None else ""
+        raise CommandError(f"{path} is not valid YAML{at}") from None
+    outcome = None
+    if isinstance(data, dict):
+        unknown = sorted(str(k) for k in data if k not in ("action", "outcome"))
+        if unknown:
+            raise CommandError(f"{path}: unknown keys {unknown}; allowed: action, outcome")
+        if "action" not in data:
+            raise CommandError(f"{path}: no 'action' key (a list of {action_size} numbers)")
+        if "outcome" in data:
+            outcome = _vector(data["outcome"], OUTCOME_SIZE, f"{path}: outcome")
+        data = data["action"]
+    elif not isinstance(data, list):
+        raise CommandError(f"{path} must hold a list of {action_size} numbers or a mapping "
+                           f"with 'action', not {type(data).__name__}")
+    return _vector(data, action_size, f"{path}: action"), outcome
+
+
+def _vector(values: Any, size: int, what: str) -> np.ndarray:
+    if not isinstance(values, list):
+        raise CommandError(f"{what} must be a list of {size} numbers, "
+                           f"not {type(values).__name__}")
+    if len(values) != size:
+        raise CommandError(f"{what} has {len(values)} values, {size} are needed")
+    return np.array([parse_unit(v, f"{what}[{i}]") for i, v in enumerate(values)])
+
+
+def executed_demonstration(request: ExecuteFirst, landed: bool, outcome: Any,
+                           message: str) -> SendDemonstration:
+    """The demonstration of a file's action once the simulator has executed it."""
+    if not landed:
+        raise CommandError(f"the action of {request.path} did not land "
+                           f"({message or 'no outcome'}): nothing sent")
+    y = np.asarray(outcome, dtype=float)
+    note = ""
+    if request.file_outcome is not None:
+        note = (f"; the file's outcome {fmt(request.file_outcome)} is "
+                f"{np.linalg.norm(y - request.file_outcome):.3f} away and was not used")
+    return SendDemonstration(request.action, y, -1,
+                             f"the action of {request.path}, executed: outcome {fmt(y)}{note}")
+
+
+def unexecuted_demonstration(request: ExecuteFirst, why: str) -> SendDemonstration:
+    """The file's own outcome, when the simulator cannot be asked (``why``)."""
+    if request.file_outcome is None:
+        raise CommandError(f"cannot measure the outcome of {request.path}: {why}; start "
+                           f"sim_bridge, or add 'outcome: [x, y]' to the file")
+    return SendDemonstration(request.action, request.file_outcome, -1,
+                             f"the action of {request.path} with the file's outcome "
+                             f"{fmt(request.file_outcome)} (not executed: {why})")

@@ -1,0 +1,254 @@
+"""The human_input node driven through its prompt, over ROS, as a person would at a terminal.
+
+The node reads a pipe here: the test types lines, reads what it prints and checks the
+demonstrations it publishes. Until the lead adds the console script it is started with
+`python -m teacher.human_input_node`.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from tests.conftest import PYTHON
+from tests.ros.graph_client import GraphClient
+
+pytestmark = pytest.mark.ros
+
+A = 24
+OUTCOMES = np.array([[0.0, 0.0], [0.5, 0.5], [-0.5, 0.5], [0.5, -0.5]])
+ACTIONS = np.array([np.full(A, 0.1 * (i + 1)) for i in range(len(OUTCOMES))])
+PROMPT = "human> "
+
+
+class Terminal:
+    """The node's stdin and stdout: type lines, wait for what it prints."""
+
+    def __init__(self, child: subprocess.Popen, client: GraphClient) -> None:
+        self.child, self.client = child, client
+        self.text = ""
+        self._lock = threading.Lock()
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        fd = self.child.stdout.fileno()
+        while chunk := os.read(fd, 4096):
+            with self._lock:
+                self.text += chunk.decode(errors="replace")
+
+    def output(self, start: int = 0) -> str:
+        with self._lock:
+            return self.text[start:]
+
+    def wait_for(self, text: str, start: int = 0, timeout: float = 30.0) -> str:
+        """Spin the test node (its service may be called) until `text` is printed."""
+        found = self.client.spin_until(lambda: text in self.output(start), timeout)
+        assert found, f"{text!r} never printed; output so far:\n{self.output()}"
+        out = self.output(start)
+        return out[: out.index(text)]
+
+    def type(self, line: str) -> int:
+        """Type a line; returns where the reply starts in the output."""
+        start = len(self.output())
+        self.child.stdin.write(f"{line}\n".encode())
+        self.child.stdin.flush()
+        return start
+
+    def command(self, line: str) -> str:
+        """Type a line; the node's reply, up to its next prompt."""
+        return self.wait_for(PROMPT, self.type(line))
+
+    def exit_code(self, timeout: float = 20.0) -> int:
+        deadline = time.monotonic() + timeout
+        while self.child.poll() is None and time.monotonic() < deadline:
+            self.client.spin_for(0.05)
+        assert self.child.poll() is not None, f"node did not exit:\n{self.output()}"
+        self._reader.join(timeout=5)
+        return self.child.returncode
+
+
+@pytest.fixture
+def teaching_file(tmp_path):
+    path = tmp_path / "teaching_set.npz"
+    np.savez(path, actions=ACTIONS, outcomes=OUTCOMES, spread=np.zeros(len(OUTCOMES)))
+    return path
+
+
+@pytest.fixture
+def client(rclpy_context):
+    c = GraphClient(rclpy_context)
+    yield c
+    c.close()
+
+
+def _start(ros_processes, tmp_path, *params: str, name: str = "human_input"):
+    argv = [PYTHON, "-m", "teacher.human_input_node", "--ros-args"]
+    for p in params:
+        argv += ["-p", p]
+    return ros_processes.start(name, argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                               stderr=subprocess.STDOUT, cwd=tmp_path)
+
+
+def _movement(index: int, action, outcome):
+    from sgim_msgs.msg import Movement
+
+    status = Movement.STATUS_OK if outcome else Movement.STATUS_NO_CONTACT
+    return Movement(index=index, process=Movement.PROCESS_GOAL_DIRECTED, status=status,
+                    action=[float(v) for v in action], outcome=[float(v) for v in outcome])
+
+
+def test_list_teach_goal_and_bad_input_through_the_prompt(ros_processes, client, tmp_path,
+                                                          teaching_file):
+    from sgim_msgs.msg import Demonstration, Evaluation, Movement
+    from sgim_ros import qos
+    from teacher.human_commands import GoalPoint, LearnerState, TeachingLibrary
+
+    demos = client.capture(Demonstration, "/demonstrations", qos.RECORDS)
+    movements = client.node.create_publisher(Movement, "/movements", qos.RECORDS)
+    evaluations = client.node.create_publisher(Evaluation, "/evaluations", qos.RECORDS)
+    child = _start(ros_processes, tmp_path, f"teaching_set:={teaching_file}")
+    term = Terminal(child, client)
+    term.wait_for(PROMPT)
+    assert "4 teaching-set entries" in term.output()
+    assert client.spin_until(lambda: movements.get_subscription_count() > 0
+                             and evaluations.get_subscription_count() > 0)
+
+    learner = np.full(A, -0.3)
+    sent = [_movement(1, learner, [0.5, 0.52]),  # reaches teaching entry 1
+            _movement(2, learner, []),  # a failed cast: counted, not a reached outcome
+            _movement(3, learner, [-0.2, -0.2])]
+    for m in sent:
+        movements.publish(m)
+    evaluations.publish(Evaluation(movement_index=3, mean_distance=0.321, outcome_size=2))
+    # Poll until the node has heard everything and sees the test's subscription.
+    for _ in range(100):
+        status = term.command("status")
+        if ("movements: 3" in status and "0.3210" in status
+                and "listening to demonstrations: 1" in status):
+            break
+        client.spin_for(0.1)
+    else:
+        pytest.fail(f"the node never heard the movements:\n{term.output()}")
+
+    listed = term.command("list").splitlines()
+    assert "3 of 4 teaching goals not reached within 0.05:" in listed
+    numbered = [int(line.split(":")[0]) for line in listed if line.startswith("  ")]
+    assert numbered == [0, 2, 3]
+
+    reply = term.command("teach 0")
+    assert "sent demonstration 1 at movement 3" in reply and "teaching-set entry 0" in reply
+    assert client.spin_until(lambda: len(demos) == 1)
+    d = demos[0]
+    assert d.source == "human" and d.teaching_set_index == 0 and d.index == 1
+    assert d.movement_index == 3
+    assert np.array_equal(d.action, ACTIONS[0]) and np.array_equal(d.outcome, OUTCOMES[0])
+
+    for bad, message in [("fly", "error: unknown command 'fly'"),
+                         ("teach 9", "error: no teaching-set entry 9: entries are 0 to 3"),
+                         ("goal 0.1", "error: 'goal' needs 2 numbers"),
+                         ("goal 0.1 nan", "error: goal Y is NaN"),
+                         ("goal 1.5 0", "error: goal X = 1.5 is outside [-1, 1]"),
+                         ("yaml missing.yaml", "error: no such file: missing.yaml")]:
+        assert message in term.command(bad)
+    (tmp_path / "no_outcome.yaml").write_text(str([0.0] * A))
+    # No execute_action server in this test and no outcome in the file: refused, clearly.
+    assert "start sim_bridge, or add 'outcome: [x, y]'" in term.command("yaml no_outcome.yaml")
+
+    reply = term.command("goal 0.1 0.2")
+    assert "sent demonstration 2 at movement 3" in reply
+    assert client.spin_until(lambda: len(demos) == 2)
+    state = LearnerState(A)
+    for m in sent:
+        state.add_movement(m.index, len(m.outcome) == 2, m.action, m.outcome)
+    expected = TeachingLibrary(ACTIONS, OUTCOMES, 0.05).decide(GoalPoint((0.1, 0.2)), state)
+    d = demos[1]
+    assert d.teaching_set_index == expected.teaching_set_index and d.index == 2
+    assert np.array_equal(d.action, expected.action)
+    assert np.array_equal(d.outcome, expected.outcome)
+    assert expected.text in reply  # the reply says which pair was taken
+
+    # Among a lone learner movement and the teaching set, the exact pair wins and is named.
+    reply = term.command("goal -0.2 -0.2")
+    assert "the action of learner movement 3, outcome (-0.200, -0.200)" in reply
+    assert client.spin_until(lambda: len(demos) == 3)
+    assert demos[2].teaching_set_index == -1 and np.array_equal(demos[2].action, learner)
+
+    start = term.type("quit")
+    assert term.exit_code() == 0
+    assert term.output(start).strip().endswith("bye")
+    client.spin_for(0.3)
+    assert len(demos) == 3  # bad input sent nothing
+    assert "Traceback" not in term.output()
+
+
+def test_yaml_action_is_measured_by_execute_action_then_end_of_input(ros_processes, client,
+                                                                     tmp_path, teaching_file):
+    from sgim_msgs.msg import Demonstration, Movement
+    from sgim_msgs.srv import ExecuteAction
+    from sgim_ros import qos
+
+    requests = []
+    answers = [(Movement.STATUS_OK, [0.25, -0.5], ""),
+               (Movement.STATUS_NO_CONTACT, [], "the hook never touched the water")]
+
+    def execute(request, response):
+        requests.append(request)
+        response.status, response.outcome, response.message = answers[len(requests) - 1]
+        return response
+
+    client.node.create_service(ExecuteAction, "/execute_action", execute)
+    demos = client.capture(Demonstration, "/demonstrations", qos.RECORDS)
+    child = _start(ros_processes, tmp_path, f"teaching_set:={teaching_file}")
+    term = Terminal(child, client)
+    term.wait_for(PROMPT)
+    for _ in range(100):
+        if "listening to demonstrations: 1" in term.command("status"):
+            break
+        client.spin_for(0.1)
+
+    action = [round(-1 + 2 * i / 23, 4) for i in range(A)]
+    (tmp_path / "demo.yaml").write_text(f"# a person's cast\naction: {action}\n")
+    reply = term.command("yaml demo.yaml")
+    assert "executed: outcome (+0.250, -0.500)" in reply and "sent demonstration 1" in reply
+    assert client.spin_until(lambda: len(demos) == 1)
+    assert demos[0].outcome.tolist() == [0.25, -0.5] and demos[0].teaching_set_index == -1
+    assert np.allclose(demos[0].action, action)
+    r = requests[0]
+    assert not r.record and r.movement_index == 0 and np.allclose(r.action, action)
+
+    assert "did not land (the hook never touched the water): nothing sent" in term.command(
+        "yaml demo.yaml")
+    (tmp_path / "short.yaml").write_text("[0.1, 0.2]")
+    assert "action has 2 values, 24 are needed" in term.command("yaml short.yaml")
+
+    child.stdin.close()  # end of input, as `node < commands.txt` would give
+    assert term.exit_code() == 0
+    assert "end of input: bye" in term.output()
+    client.spin_for(0.3)
+    assert len(demos) == 1 and len(requests) == 2
+
+
+def test_bad_parameters_and_ctrl_c(ros_processes, client, tmp_path, teaching_file):
+    for params, words in [(["tolerance:=-0.5"], ["tolerance", ">= 0"]),
+                          (["tolerance:=abc"], ["tolerance", "type float"]),
+                          (["execute_timeout:=0.0"], ["execute_timeout", "> 0"]),
+                          ([f"teaching_set:={tmp_path / 'nope.npz'}"], ["teaching_set", "nope"])]:
+        child = _start(ros_processes, tmp_path, *params, name="human_input_bad")
+        output, _ = child.communicate(timeout=60)
+        assert child.returncode == 2, output.decode()
+        for w in words:
+            assert w in output.decode()
+
+    child = _start(ros_processes, tmp_path, f"teaching_set:={teaching_file}", name="ctrl_c")
+    term = Terminal(child, client)
+    term.wait_for(PROMPT)
+    os.killpg(child.pid, signal.SIGINT)
+    assert term.exit_code() == 0
+    assert "bye" in term.output() and "Traceback" not in term.output()
