@@ -5,6 +5,10 @@ installed by colcon they sit in ``<prefix>/share/sim_bridge/data`` (setup.py ``d
 installed as package data in ``sim_bridge/data`` inside the package. Every candidate is a path
 relative to this module (or ``SIM_BRIDGE_DATA_DIR``), so no ROS import and no working directory
 is needed.
+
+The isolated region (the pond cut off by land, ``lake.py``) is re-exported here so the analysis can
+measure each learner's coverage of it: ``ISOLATED_REGION = {"centre": (-0.5, -0.25), "radius":
+0.112}`` in normalised outcome units, and ``in_isolated_region(outcomes)``.
 """
 
 from __future__ import annotations
@@ -14,6 +18,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from sim_bridge.lake import ISOLATED_REGION, in_isolated_region
+
+__all__ = ["ISOLATED_REGION", "ReachableMap", "TeachingSet", "data_dir", "in_isolated_region",
+           "load_benchmark_goals", "load_reachable_casts", "load_reachable_map",
+           "load_teaching_set"]
 
 REACHABLE_MAP = "reachable_map.npz"
 BENCHMARK_GOALS = "benchmark_goals.npz"

@@ -10,8 +10,9 @@ range ``[lo, hi]`` (``-1 -> lo``, ``+1 -> hi``); a duration number maps linearly
 ``[DURATION_MIN, DURATION_MAX]`` seconds.
 
 Outcome: the world point ``(x, y)`` in metres (robot base at the origin, x forward, y to the left)
-maps linearly onto [-1, 1]^2 through the box ``OUTCOME_BOX``, which covers every point reached by
-the mapping run (see README_world.md); a point outside the box is clipped onto it and flagged.
+where the hook lands on water maps linearly onto [-1, 1]^2 through the box ``OUTCOME_BOX``, the
+bounding box of the water (``lake.water_bounding_box()``, every part of which the mapping run
+reaches, see README_world.md), so no water landing is ever clipped.
 """
 
 from __future__ import annotations
@@ -39,8 +40,9 @@ JOINT_RANGES: np.ndarray = np.array(
 DURATION_MIN = 0.25  # s: the fastest a joint's curve may be run (the motors then lag behind it)
 DURATION_MAX = 0.90  # s: slow enough to lay the hook down, short enough to keep casts cheap
 
-# World box (m) mapped onto [-1, 1]^2: x_min, x_max, y_min, y_max. Set from the mapping run.
-OUTCOME_BOX: np.ndarray = np.array([-9.0, 11.0, -10.0, 10.0])
+# World box (m) mapped onto [-1, 1]^2: x_min, x_max, y_min, y_max. The bounding box of the water
+# (lake.py; a test checks they agree); square, so distances scale the same along x and y.
+OUTCOME_BOX: np.ndarray = np.array([-8.5, 8.5, -8.5, 8.5])
 
 
 def split_action(action: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

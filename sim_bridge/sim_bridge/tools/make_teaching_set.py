@@ -2,10 +2,18 @@
 holding reached points, the recorded action whose outcome varies least over repeated casts.
 
 Why the most repeatable action: a demonstration is only useful to the learner if imitating it
-lands where it says; an action in a chaotic part of the action space would teach noise. Saved per
-cell: the action, the mean outcome of its repeats and their spread (mean distance to the mean).
+lands where it says; an action in a chaotic part of the action space would teach noise. An action
+whose repeats do not all land on water (some land on the shore) is never chosen. Saved per entry:
+the action, the mean outcome of its repeats and their spread (mean distance to the mean).
 
-    python -m sim_bridge.tools.make_teaching_set --grid 7 5 --candidates 6 --repeats 10 --seed 0
+Why the isolated pond is one group of its own: a coarse cell can hold both main-lake and pond
+landings, and the few pond candidates would lose the draw; a teacher can only show the pond if the
+teaching set holds it, so the pond's landings (``lake.in_isolated_region``) form one extra group,
+whatever coarse cells the pond straddles (one entry, not one per straddled cell). Near the shore
+many candidates fail, so each group tries up to ``--max-candidates`` recorded actions until
+``--candidates`` of them landed every repeat on water.
+
+    python -m sim_bridge.tools.make_teaching_set --grid 10 7 --candidates 6 --repeats 10 --seed 0
 """
 
 from __future__ import annotations
@@ -17,6 +25,9 @@ from tqdm import tqdm
 
 from sim_bridge.data_files import load_reachable_casts
 from sim_bridge.fishing_world import FishingWorld, Status
+from sim_bridge.lake import in_isolated_region
+
+GRID = (10, 7)
 
 
 def repeat_spread(world: FishingWorld, action: np.ndarray,
@@ -33,26 +44,35 @@ def repeat_spread(world: FishingWorld, action: np.ndarray,
     return mean, float(np.mean(np.linalg.norm(o - mean, axis=1)))
 
 
-def teaching_set(actions: np.ndarray, outcomes: np.ndarray, grid: tuple[int, int],
-                 candidates: int, repeats: int, seed: int, progress: bool = True
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Actions (M, 24), mean outcomes (M, 2), spreads (M,) of the chosen demonstrations."""
+def teaching_groups(outcomes: np.ndarray, grid: tuple[int, int]) -> np.ndarray:
+    """Group number of every outcome: its coarse cell, or ``grid[0] * grid[1]`` (one group of its
+    own) for the isolated pond's landings, whatever cells the pond straddles."""
     lo, hi = outcomes.min(axis=0), outcomes.max(axis=0)
     size = (hi - lo) / np.array(grid)
     idx = np.minimum(((outcomes - lo) / size).astype(int), np.array(grid) - 1)
     cell = idx[:, 0] * grid[1] + idx[:, 1]
+    return np.where(in_isolated_region(outcomes), grid[0] * grid[1], cell)
+
+
+def teaching_set(actions: np.ndarray, outcomes: np.ndarray, grid: tuple[int, int],
+                 candidates: int, repeats: int, seed: int, max_candidates: int = 30,
+                 progress: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Actions (M, 24), mean outcomes (M, 2), spreads (M,) of the chosen demonstrations."""
+    group = teaching_groups(np.asarray(outcomes, dtype=np.float64), grid)
     rng = np.random.default_rng(seed)
     world = FishingWorld(seed=seed)
     chosen_a, chosen_o, chosen_s = [], [], []
-    for c in tqdm(np.unique(cell), desc="cells", disable=not progress):
-        members = np.flatnonzero(cell == c)
-        picks = rng.choice(members, size=min(candidates, len(members)), replace=False)
-        best = (float("inf"), None, None)
-        for p in picks:
+    for g in tqdm(np.unique(group), desc="cells", disable=not progress):
+        members = rng.permutation(np.flatnonzero(group == g))[:max_candidates]
+        best, landed = (float("inf"), None, None), 0
+        for p in members:
             a = actions[p].astype(np.float64)
             mean, spread = repeat_spread(world, a, repeats)
+            landed += bool(np.isfinite(spread))
             if spread < best[0]:
                 best = (spread, a, mean)
+            if landed >= candidates:
+                break
         if best[1] is not None:
             chosen_s.append(best[0])
             chosen_a.append(best[1])
@@ -65,18 +85,23 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--reachable", default=None, help="map .npz (default: the stored one)")
-    parser.add_argument("--grid", type=int, nargs=2, default=(7, 5), help="cells in x and y")
-    parser.add_argument("--candidates", type=int, default=6, help="recorded actions tried per cell")
+    parser.add_argument("--grid", type=int, nargs=2, default=GRID, help="cells in x and y")
+    parser.add_argument("--candidates", type=int, default=6,
+                        help="recorded actions per group whose repeats all landed on water")
+    parser.add_argument("--max-candidates", type=int, default=30,
+                        help="recorded actions tried at most per group")
     parser.add_argument("--repeats", type=int, default=10, help="noisy casts per candidate (>=10)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--output", default="sim_bridge/data/teaching_set.npz")
     args = parser.parse_args(argv)
     casts = load_reachable_casts(args.reachable)
     a, o, s = teaching_set(casts.actions, casts.outcomes, tuple(args.grid), args.candidates,
-                           args.repeats, args.seed)
+                           args.repeats, args.seed, args.max_candidates)
     np.savez_compressed(args.output, actions=a, outcomes=o, spread=s, seed=args.seed,
                         grid=np.array(args.grid), repeats=args.repeats)
-    print(f"{len(a)} demonstrations -> {args.output}; spread median {np.median(s):.4f}")
+    pond = np.flatnonzero(in_isolated_region(o))
+    print(f"{len(a)} demonstrations -> {args.output}; spread median {np.median(s):.4f}; "
+          f"in the isolated pond: entries {pond.tolist()} at {np.round(o[pond], 3).tolist()}")
 
 
 if __name__ == "__main__":

@@ -1,11 +1,16 @@
-"""Map the reachable outcomes: random casts, then casts spread from the sparsest cells.
+"""Map the reachable water: random casts, casts spread from the sparsest cells, and a targeted
+search around the casts that reached the isolated pond.
 
-Why two phases: random actions pile up in the natural landing zone, so uniform sampling alone
-leaves the rare regions with a handful of points. The second phase re-casts small perturbations
-of actions that landed in the least visited cells of a 26 x 16 grid, which fills those regions.
+Why three phases: random actions pile up in the natural landing zone, so uniform sampling alone
+leaves the arms of the lake and the pond with a handful of points. The spread phase re-casts small
+perturbations of actions that landed in the least visited cells of a 26 x 16 grid, which fills the
+arms. The pond is surrounded by land, so perturbing main-lake casts never reaches it; the pond
+phase re-casts perturbations of the actions that did land in it (the random phase finds a few
+dozen), so the teaching set can hold a demonstration there. Only water landings are outcomes:
+casts that land on land or never reach the water are counted, not saved.
 Saves the landed casts (actions and normalised outcomes, float32) as a compressed .npz and a PNG.
 
-    python -m sim_bridge.tools.map_reachable --random 8000 --spread 4000 --seed 0
+    python -m sim_bridge.tools.map_reachable --random 10000 --spread 5000 --pond 800 --seed 0
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ import numpy as np
 from tqdm import tqdm
 
 from sim_bridge.fishing_world import FishingWorld, Status
+from sim_bridge.lake import in_isolated_region
 
 GRID = (26, 16)
 
@@ -29,48 +35,87 @@ def cell_index(outcomes: np.ndarray, grid: tuple[int, int] = GRID) -> np.ndarray
     return ix * ny + iy
 
 
+class _Mapper:
+    """Casts actions, keeps the water landings, counts the rest."""
+
+    def __init__(self, world: FishingWorld, bar: tqdm) -> None:
+        self.world, self.bar = world, bar
+        self.actions: list[np.ndarray] = []
+        self.outcomes: list[np.ndarray] = []
+        self.land = self.no_water = self.failed = 0
+
+    def cast(self, a: np.ndarray) -> bool:
+        r = self.world.execute(a)
+        self.bar.update()
+        if r.status == Status.OK:
+            self.actions.append(a)
+            self.outcomes.append(r.outcome)
+            return True
+        if r.status == Status.NO_CONTACT and r.world_point is not None:
+            self.land += 1
+        elif r.status == Status.NO_CONTACT:
+            self.no_water += 1
+        else:
+            self.failed += 1
+        return False
+
+
 def run_mapping(n_random: int, n_spread: int, seed: int, sigma: float = 0.05,
-                progress: bool = True) -> tuple[np.ndarray, np.ndarray]:
-    """Actions (N, 24) and outcomes (N, 2) of every landed cast."""
+                n_pond: int = 0, pond_sigma: float = 0.01, progress: bool = True
+                ) -> tuple[np.ndarray, np.ndarray, dict[str, int]]:
+    """Actions (N, 24), outcomes (N, 2) of every water landing, and counts of each phase."""
     rng = np.random.default_rng(seed)
     world = FishingWorld(seed=seed)
-    actions, outcomes = [], []
-    bar = tqdm(total=n_random + n_spread, desc="casts", disable=not progress)
+    bar = tqdm(total=n_random + n_spread + n_pond, desc="casts", disable=not progress)
+    m = _Mapper(world, bar)
     for a in rng.uniform(-1, 1, (n_random, world.action_dim)):
-        r = world.execute(a)
-        if r.status == Status.OK:
-            actions.append(a)
-            outcomes.append(r.outcome)
-        bar.update()
+        m.cast(a)
+    stats = {"random_water": len(m.outcomes), "random_land": m.land,
+             "random_pond": int(in_isolated_region(np.array(m.outcomes)).sum())}
     done = 0
     while done < n_spread:
         batch = min(500, n_spread - done)
-        cells = cell_index(np.array(outcomes))
+        cells = cell_index(np.array(m.outcomes))
         counts = np.bincount(cells, minlength=GRID[0] * GRID[1])
         weight = 1.0 / counts[cells]  # favour casts whose cell is sparsely visited
         parents = rng.choice(len(cells), size=batch, p=weight / weight.sum())
         for p in parents:
-            a = np.clip(actions[p] + sigma * rng.standard_normal(world.action_dim), -1, 1)
-            r = world.execute(a)
-            if r.status == Status.OK:
-                actions.append(a)
-                outcomes.append(r.outcome)
-            bar.update()
+            m.cast(np.clip(m.actions[p] + sigma * rng.standard_normal(world.action_dim), -1, 1))
+        done += batch
+    done = 0
+    while done < n_pond:  # parents: every pond landing so far, the new ones included
+        batch = min(100, n_pond - done)
+        pond = np.flatnonzero(in_isolated_region(np.array(m.outcomes)))
+        if len(pond) == 0:
+            raise RuntimeError("no cast reached the isolated pond: raise --random or --spread")
+        for p in rng.choice(pond, size=batch):
+            a = m.actions[p] + pond_sigma * rng.standard_normal(world.action_dim)
+            m.cast(np.clip(a, -1, 1))
         done += batch
     bar.close()
     world.close()
-    return np.array(actions, dtype=np.float32), np.array(outcomes, dtype=np.float32)
+    outcomes = np.array(m.outcomes, dtype=np.float32)
+    stats |= {"water": len(outcomes), "land": m.land, "no_water": m.no_water,
+              "failed": m.failed, "pond": int(in_isolated_region(outcomes).sum())}
+    return np.array(m.actions, dtype=np.float32), outcomes, stats
 
 
 def save_png(outcomes: np.ndarray, path: Path, title: str) -> None:
-    """Scatter of the reached outcomes."""
+    """Scatter of the reached outcomes, the isolated pond's in orange, and the shoreline."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(6, 5))
-    ax.scatter(outcomes[:, 0], outcomes[:, 1], s=1, alpha=0.3)
-    ax.set(xlim=(-1, 1), ylim=(-1, 1), xlabel="outcome x (normalised)",
+
+    from sim_bridge.lake import draw_shoreline
+    fig, ax = plt.subplots(figsize=(6, 5.6))
+    pond = in_isolated_region(outcomes)
+    ax.scatter(outcomes[~pond, 0], outcomes[~pond, 1], s=1, alpha=0.3, label="main lake")
+    ax.scatter(outcomes[pond, 0], outcomes[pond, 1], s=1, alpha=0.5, color="tab:orange",
+               label="isolated pond")
+    draw_shoreline(ax)
+    ax.set(xlim=(-1, 1), ylim=(-1, 1), aspect="equal", xlabel="outcome x (normalised)",
            ylabel="outcome y (normalised)", title=title)
+    ax.legend(loc="upper right", fontsize=7, markerscale=6)
     fig.tight_layout()
     fig.savefig(path, dpi=80)
     plt.close(fig)
@@ -79,18 +124,24 @@ def save_png(outcomes: np.ndarray, path: Path, title: str) -> None:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--random", type=int, default=8000, help="uniform random casts")
-    parser.add_argument("--spread", type=int, default=4000, help="casts spread from sparse cells")
+    parser.add_argument("--random", type=int, default=10000, help="uniform random casts")
+    parser.add_argument("--spread", type=int, default=5000, help="casts spread from sparse cells")
     parser.add_argument("--sigma", type=float, default=0.05, help="perturbation std (action units)")
+    parser.add_argument("--pond", type=int, default=800,
+                        help="casts perturbing the actions that reached the isolated pond")
+    parser.add_argument("--pond-sigma", type=float, default=0.01,
+                        help="perturbation std of the pond search (action units)")
     parser.add_argument("--seed", type=int, default=0, help="seed of actions and world noise")
     parser.add_argument("--output", default="sim_bridge/data/reachable_map.npz")
     parser.add_argument("--png", default="docs/figures/sim_reachable_map.png")
     args = parser.parse_args(argv)
-    actions, outcomes = run_mapping(args.random, args.spread, args.seed, args.sigma)
-    np.savez_compressed(args.output, actions=actions, outcomes=outcomes,
-                        seed=args.seed, n_random=args.random, n_spread=args.spread)
-    save_png(outcomes, Path(args.png), f"{len(outcomes)} reached points (seed {args.seed})")
-    print(f"{len(outcomes)} landed casts -> {args.output}, {args.png}")
+    actions, outcomes, stats = run_mapping(args.random, args.spread, args.seed, args.sigma,
+                                           args.pond, args.pond_sigma)
+    np.savez_compressed(args.output, actions=actions, outcomes=outcomes, seed=args.seed,
+                        n_random=args.random, n_spread=args.spread, n_pond=args.pond,
+                        sigma=args.sigma, pond_sigma=args.pond_sigma)
+    save_png(outcomes, Path(args.png), f"{len(outcomes)} water landings (seed {args.seed})")
+    print(f"{len(outcomes)} water landings -> {args.output}, {args.png}; {stats}")
 
 
 if __name__ == "__main__":
