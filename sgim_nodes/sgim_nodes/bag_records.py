@@ -1,0 +1,187 @@
+"""Plain dataclasses for the records of a run, detached from any message library.
+
+Analysis code should not depend on rosbags' or rclpy's message classes (which differ between
+them): the bag reader converts every sgim_msgs message into one of these, with numpy arrays
+for the vectors and nanoseconds for the stamps. `time_ns` is when the recorder received the
+message, `stamp_ns` the message's own stamp.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+def _vec(values) -> np.ndarray:
+    return np.array(values, dtype=float)
+
+
+def _stamp(stamp) -> int:
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+@dataclass
+class MovementRecord:
+    time_ns: int
+    stamp_ns: int
+    index: int
+    process: int
+    status: int
+    action: np.ndarray
+    outcome: np.ndarray
+    goal: np.ndarray
+    goal_index: int
+
+
+@dataclass
+class GoalRecord:
+    time_ns: int
+    stamp_ns: int
+    index: int
+    movement_index: int
+    point: np.ndarray
+    region_id: int
+    mode: int
+
+
+@dataclass
+class CompetenceRecord:
+    time_ns: int
+    stamp_ns: int
+    goal_index: int
+    movement_index: int
+    goal: np.ndarray
+    reached: np.ndarray
+    competence: float
+    movements_used: int
+    from_demonstration: bool
+
+
+@dataclass
+class RegionRecord:
+    id: int
+    parent_id: int
+    lower: np.ndarray
+    upper: np.ndarray
+    interest: float
+    goal_count: int
+    is_leaf: bool
+    least_competent_goal: np.ndarray
+
+
+@dataclass
+class RegionMapRecord:
+    time_ns: int
+    stamp_ns: int
+    movement_index: int
+    split_count: int
+    goal_count: int
+    regions: list[RegionRecord]
+
+    @property
+    def leaves(self) -> list[RegionRecord]:
+        return [r for r in self.regions if r.is_leaf]
+
+
+@dataclass
+class DemonstrationRecord:
+    time_ns: int
+    stamp_ns: int
+    index: int
+    movement_index: int
+    action: np.ndarray
+    outcome: np.ndarray
+    teaching_set_index: int
+    source: str
+
+
+@dataclass
+class EvaluationRecord:
+    time_ns: int
+    stamp_ns: int
+    movement_index: int
+    mean_distance: float
+    goals: np.ndarray  # (n, outcome_size)
+    reached: np.ndarray  # (n, outcome_size), NaN rows for failed casts
+    distances: np.ndarray  # (n,)
+
+
+@dataclass
+class RunStatusRecord:
+    time_ns: int
+    stamp_ns: int
+    learner: str
+    seed: int
+    movement_index: int
+    total_movements: int
+    state: int
+    message: str
+
+
+@dataclass
+class RunRecords:
+    """Every record of a run, one list per topic, in recording order."""
+
+    movements: list[MovementRecord] = field(default_factory=list)
+    goals: list[GoalRecord] = field(default_factory=list)
+    competences: list[CompetenceRecord] = field(default_factory=list)
+    region_map: list[RegionMapRecord] = field(default_factory=list)
+    demonstrations: list[DemonstrationRecord] = field(default_factory=list)
+    evaluations: list[EvaluationRecord] = field(default_factory=list)
+    run_status: list[RunStatusRecord] = field(default_factory=list)
+
+    def counts(self) -> dict[str, int]:
+        return {name: len(getattr(self, name)) for name in RECORD_TYPES}
+
+
+def _rows(flat, size: int) -> np.ndarray:
+    values = _vec(flat)
+    size = max(int(size), 1)
+    return values.reshape(-1, size) if len(values) % size == 0 else values.reshape(-1, 1)
+
+
+def _region(m) -> RegionRecord:
+    return RegionRecord(int(m.id), int(m.parent_id), _vec(m.lower), _vec(m.upper),
+                        float(m.interest), int(m.goal_count), bool(m.is_leaf),
+                        _vec(m.least_competent_goal))
+
+
+def to_record(kind: type, time_ns: int, m) -> object:
+    """Convert a deserialised message (rosbags or rclpy) into the record dataclass `kind`."""
+    t, s = int(time_ns), _stamp(m.stamp)
+    if kind is MovementRecord:
+        return MovementRecord(t, s, int(m.index), int(m.process), int(m.status), _vec(m.action),
+                              _vec(m.outcome), _vec(m.goal), int(m.goal_index))
+    if kind is GoalRecord:
+        return GoalRecord(t, s, int(m.index), int(m.movement_index), _vec(m.point),
+                          int(m.region_id), int(m.mode))
+    if kind is CompetenceRecord:
+        return CompetenceRecord(t, s, int(m.goal_index), int(m.movement_index), _vec(m.goal),
+                                _vec(m.reached), float(m.competence), int(m.movements_used),
+                                bool(m.from_demonstration))
+    if kind is RegionMapRecord:
+        return RegionMapRecord(t, s, int(m.movement_index), int(m.split_count),
+                               int(m.goal_count), [_region(r) for r in m.regions])
+    if kind is DemonstrationRecord:
+        return DemonstrationRecord(t, s, int(m.index), int(m.movement_index), _vec(m.action),
+                                   _vec(m.outcome), int(m.teaching_set_index), str(m.source))
+    if kind is EvaluationRecord:
+        return EvaluationRecord(t, s, int(m.movement_index), float(m.mean_distance),
+                                _rows(m.goals, m.outcome_size), _rows(m.reached, m.outcome_size),
+                                _vec(m.distances))
+    if kind is RunStatusRecord:
+        return RunStatusRecord(t, s, str(m.learner), int(m.seed), int(m.movement_index),
+                               int(m.total_movements), int(m.state), str(m.message))
+    raise TypeError(f"no record type {kind!r}")
+
+
+RECORD_TYPES: dict[str, type] = {
+    "movements": MovementRecord,
+    "goals": GoalRecord,
+    "competences": CompetenceRecord,
+    "region_map": RegionMapRecord,
+    "demonstrations": DemonstrationRecord,
+    "evaluations": EvaluationRecord,
+    "run_status": RunStatusRecord,
+}

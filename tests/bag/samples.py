@@ -1,0 +1,117 @@
+"""A small synthetic run as rosbags messages (no rclpy), and a writer for it.
+
+The run mimics the node graph's contract: movements 1..n, a goal and a competence every few
+movements, a demonstration mid-run followed by imitation movements, region maps, evaluations
+and a final RunStatus. Values are seeded so tests can rebuild the same records directly.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from sgim_nodes.bag_types import TOPICS, typestore
+from sgim_nodes.bag_writer import SplitBagWriter
+
+TS = typestore()
+T = TS.types
+
+
+def stamp(ns: int):
+    return T["builtin_interfaces/msg/Time"](sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+
+def movement(index: int, rng: np.random.Generator, process: int = 0, status: int = 0):
+    ok = status == 0
+    return T["sgim_msgs/msg/Movement"](
+        stamp=stamp(1_000 + index), index=index, process=process, status=status,
+        action=rng.uniform(-1, 1, 24),
+        outcome=rng.uniform(-1, 1, 2) if ok else np.zeros(0),
+        goal=rng.uniform(-1, 1, 2), goal_index=index // 5 + 1)
+
+
+def goal(index: int, movement_index: int, rng: np.random.Generator):
+    return T["sgim_msgs/msg/Goal"](stamp=stamp(7), index=index, movement_index=movement_index,
+                                   point=rng.uniform(-1, 1, 2), region_id=index % 3, mode=1)
+
+
+def competence(goal_index: int, movement_index: int, rng: np.random.Generator,
+               from_demonstration: bool = False):
+    return T["sgim_msgs/msg/Competence"](
+        stamp=stamp(9), goal_index=goal_index, movement_index=movement_index,
+        goal=rng.uniform(-1, 1, 2), reached=rng.uniform(-1, 1, 2),
+        competence=float(-rng.uniform(0, 1)), movements_used=5,
+        from_demonstration=from_demonstration)
+
+
+def region(rid: int, parent: int, lower, upper, leaf: bool):
+    return T["sgim_msgs/msg/Region"](
+        id=rid, parent_id=parent, lower=np.asarray(lower, float), upper=np.asarray(upper, float),
+        interest=0.01 * rid, goal_count=3 * rid, is_leaf=leaf,
+        least_competent_goal=np.asarray(lower, float) + 0.1)
+
+
+def region_map(movement_index: int, split: bool):
+    regions = [region(0, -1, [-1, -1], [1, 1], not split)]
+    if split:
+        regions += [region(1, 0, [-1, -1], [0, 1], True), region(2, 0, [0, -1], [1, 1], True)]
+    return T["sgim_msgs/msg/RegionMap"](stamp=stamp(11), movement_index=movement_index,
+                                        split_count=int(split), goal_count=movement_index // 5,
+                                        regions=regions)
+
+
+def demonstration(index: int, movement_index: int, rng: np.random.Generator):
+    return T["sgim_msgs/msg/Demonstration"](
+        stamp=stamp(13), index=index, movement_index=movement_index,
+        action=rng.uniform(-1, 1, 24), outcome=rng.uniform(-1, 1, 2),
+        teaching_set_index=index + 4, source="automatic")
+
+
+def evaluation(movement_index: int, rng: np.random.Generator):
+    goals = rng.uniform(-1, 1, (3, 2))
+    reached = goals + 0.1
+    reached[1] = np.nan  # a failed cast
+    distances = np.array([0.14, 2.83, 0.14])
+    return T["sgim_msgs/msg/Evaluation"](
+        stamp=stamp(17), movement_index=movement_index, mean_distance=float(distances.mean()),
+        outcome_size=2, goals=goals.ravel(), reached=reached.ravel(), distances=distances)
+
+
+def run_status(movement_index: int, total: int, state: int, message: str = ""):
+    return T["sgim_msgs/msg/RunStatus"](stamp=stamp(19), learner="sgim-d", seed=3,
+                                        movement_index=movement_index, total_movements=total,
+                                        state=state, message=message)
+
+
+def synthetic_run(n: int = 60, seed: int = 0) -> list[tuple[str, object]]:
+    """(topic, message) in publication order for an n-movement SGIM-D-like run."""
+    rng = np.random.default_rng(seed)
+    out: list[tuple[str, object]] = [("run_status", run_status(0, n, 0))]
+    goal_count = 0
+    for i in range(1, n + 1):
+        if i % 5 == 1:
+            goal_count += 1
+            out.append(("goals", goal(goal_count, i - 1, rng)))
+        if i == n // 2:  # a demonstration at count i - 1, then imitation movements
+            out.append(("demonstrations", demonstration(1, i - 1, rng)))
+        process = 2 if n // 2 <= i < n // 2 + 5 else (1 if i % 4 == 0 else 0)
+        out.append(("movements", movement(i, rng, process, status=1 if i % 7 == 0 else 0)))
+        if i % 5 == 0:
+            out.append(("competences", competence(goal_count, i, rng, i == n // 2 + 4)))
+            out.append(("region_map", region_map(i, split=i > n // 2)))
+        if i % 20 == 0:
+            out.append(("evaluations", evaluation(i, rng)))
+    out.append(("run_status", run_status(n, n, 1, "done")))
+    return out
+
+
+def write_bag(path: Path, messages: list[tuple[str, object]], **writer_kwargs) -> Path:
+    """Write (topic, message) pairs with the split writer, topics as '/name'."""
+    bag = SplitBagWriter(path, **writer_kwargs)
+    for topic, msgtype in TOPICS.items():
+        bag.add_topic(f"/{topic}", msgtype)
+    for k, (topic, msg) in enumerate(messages):
+        bag.write(f"/{topic}", 1_000_000 + k, TS.serialize_cdr(msg, msg.__msgtype__))
+    bag.close()
+    return path

@@ -1,0 +1,83 @@
+"""Replaying a bag at a high rate delivers every message, on the right topics, in order."""
+
+from __future__ import annotations
+
+import subprocess
+import time
+
+import numpy as np
+import pytest
+
+from tests.bag import ros_helpers as h
+from tests.bag import samples
+from tests.ros.graph_client import GraphClient
+
+pytestmark = pytest.mark.ros
+
+
+@pytest.fixture
+def client(rclpy_context):
+    c = GraphClient(rclpy_context, "replay_test_client")
+    yield c
+    c.close()
+
+
+def _replay(bag, *args) -> list[str]:
+    return [*h.node_command("replay", "sgim_nodes.replay"), str(bag), *args]
+
+
+def test_replay_at_a_high_rate_delivers_everything(ros_processes, client, tmp_path):
+    from sgim_nodes.bag_types import TOPICS
+    from sgim_nodes.recorder_node import ros_message_class, topic_qos
+
+    messages = samples.synthetic_run(120, seed=3)
+    bag = samples.write_bag(tmp_path / "run", messages, split_messages=50)
+    received = {name: client.capture(ros_message_class(t), f"/{name}",
+                                     topic_qos(name, keep_all=True))
+                for name, t in TOPICS.items()}
+    start = time.monotonic()
+    child = ros_processes.start("replay", _replay(bag, "--rate", "20", "--wait-subscribers", "30",
+                                                  "--quiet"))
+    expected = {}
+    for topic, msg in messages:
+        expected.setdefault(topic, []).append(msg)
+    assert client.spin_until(
+        lambda: all(len(received[t]) == len(v) for t, v in expected.items()), 60), {
+        t: len(v) for t, v in received.items()}
+    client.spin_until(lambda: child.poll() is not None, 30)
+    assert child.returncode == 0
+    assert time.monotonic() - start < 45
+    got = [m.index for m in received["movements"]]
+    assert got == list(range(1, 121))
+    for a, b in zip(received["movements"], expected["movements"], strict=True):
+        assert np.array_equal(np.asarray(a.action), b.action)
+    assert [len(m.regions) for m in received["region_map"]] == [
+        len(m.regions) for m in expected["region_map"]]
+    assert received["run_status"][-1].message == "done"
+
+
+def test_replay_refuses_bad_input_with_a_clear_message(ros_processes, tmp_path):
+    (tmp_path / "junk.mcap").write_bytes(b"junk")
+    bag = samples.write_bag(tmp_path / "run", samples.synthetic_run(10))
+    for args, code, expected in (
+        ([str(tmp_path / "junk.mcap")], 2, "junk.mcap"),
+        ([str(tmp_path / "nowhere")], 2, "does not exist"),
+        ([str(bag), "--rate", "0"], 2, "--rate must be > 0"),
+        ([str(bag), "--topics", "nothing_here"], 1, "nothing to play"),
+    ):
+        child = ros_processes.start("replay_bad", [*_replay(args[0]), *args[1:]],
+                                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        out, _ = child.communicate(timeout=60)
+        assert child.returncode == code, out
+        assert expected in out
+
+
+def test_the_recorded_gaps_are_kept_divided_by_the_rate():
+    from sgim_nodes.bag_reader import RawRecord
+    from sgim_nodes.replay import offsets
+
+    records = [RawRecord("/movements", "sgim_msgs/msg/Movement", t, b"")
+               for t in (5_000_000_000, 5_500_000_000, 7_000_000_000)]
+    assert offsets(records, 2.0) == pytest.approx([0.0, 0.25, 1.0])
+    assert offsets(records, 0.5) == pytest.approx([0.0, 1.0, 4.0])
+    assert offsets([], 3.0) == []
