@@ -48,8 +48,11 @@ def declare(node: Node, params: Sequence[Param]) -> dict[str, Any]:
     """Declare every parameter on the node and return their validated values by name."""
     values = {}
     for p in params:
+        # dynamic_typing: rclpy would otherwise refuse `1` for a float with its own terse
+        # exception; Param.validate converts it or names the parameter and the expected type.
         descriptor = ParameterDescriptor(
-            description=f"{p.description} ({p.requirement})" if p.requirement else p.description
+            description=f"{p.description} ({p.requirement})" if p.requirement else p.description,
+            dynamic_typing=True,
         )
         raw = node.declare_parameter(p.name, p.default, descriptor).value
         values[p.name] = p.validate(raw)

@@ -67,3 +67,23 @@ def test_evaluation_does_not_count_or_learn():
     Evaluator(eval_world, benchmark_goals(train, cells=6)).evaluate(learner.inverse)
     assert eval_world.calls > 0
     assert len(learner.memory) == n_mem and learner.n_movements == n_mov
+
+
+def test_evaluator_measures_a_touchdown_without_outcome_to_where_it_came_down():
+    from dataclasses import dataclass
+
+    @dataclass
+    class LandResult:  # like the fishing world's hook on land: no outcome, a touch-down point
+        outcome: None
+        status: int
+        touchdown: np.ndarray
+
+    class LandWorld(IdentityWorld):
+        def execute(self, action):
+            return LandResult(None, 1, np.asarray(action, float)[:2] + 0.1)
+
+    goals = np.array([[0.0, 0.0], [0.5, -0.5]])
+    res = Evaluator(LandWorld(), goals, failure_distance=9.0).evaluate(lambda g: g)
+    assert res.distances == pytest.approx([np.hypot(0.1, 0.1)] * 2)
+    assert not res.failed.any()
+    assert res.reached == pytest.approx(goals + 0.1)

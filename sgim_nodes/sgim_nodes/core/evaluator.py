@@ -3,8 +3,11 @@
 For each goal the inverse model's action (no exploration, no Nelder-Mead, no learning) is
 executed in the evaluator's OWN environment instance, so that evaluation neither counts as a
 movement nor disturbs the training world's state or random stream.  Distances are Euclidean in
-outcome units; a failed execution is reported in ``failed`` and counted at ``failure_distance``
-(the diagonal of [-1, 1]^2 by default: worse than any real outcome) in the mean.
+outcome units.  A movement without an outcome that still came down somewhere (the fishing
+hook on land: its result's ``touchdown``) is measured to that point, which is how far from the
+goal the hook really came; only an execution with no touch-down at all (a physics failure) is
+reported in ``failed`` and counted at ``failure_distance`` (the diagonal of [-1, 1]^2 by
+default: worse than any real outcome) in the mean.
 """
 
 from __future__ import annotations
@@ -17,12 +20,17 @@ import numpy as np
 from .competence import diagonal
 from .environment import Environment, is_success
 
+# The evaluator's world gets the run's seed plus this, so its noise stream is the same in the
+# single-process runner and in the graph's evaluator node, and independent of the learner's.
+EVALUATION_SEED_OFFSET = 1_000_003
+
 
 @dataclass(frozen=True)
 class EvaluationResult:
     mean_distance: float
     distances: np.ndarray  # (N,)
     failed: np.ndarray  # (N,) bool
+    reached: np.ndarray | None = None  # (N, m) outcomes, NaN rows for failed executions
 
     def to_dict(self) -> dict:
         return {"mean_distance": self.mean_distance,
@@ -44,11 +52,14 @@ class Evaluator:
         """``inverse`` maps a goal to an action (e.g. ``learner.inverse``)."""
         dist = np.empty(len(self.goals))
         failed = np.zeros(len(self.goals), dtype=bool)
+        reached = np.full(self.goals.shape, np.nan)
         for i, goal in enumerate(self.goals):
             result = self.env.execute(np.asarray(inverse(goal), dtype=float))
-            if is_success(result):
-                dist[i] = np.linalg.norm(np.asarray(result.outcome, dtype=float) - goal)
+            point = result.outcome if is_success(result) else getattr(result, "touchdown", None)
+            if point is not None:
+                reached[i] = np.asarray(point, dtype=float)
+                dist[i] = np.linalg.norm(reached[i] - goal)
             else:
                 failed[i] = True
                 dist[i] = self.failure_distance
-        return EvaluationResult(float(dist.mean()), dist, failed)
+        return EvaluationResult(float(dist.mean()), dist, failed, reached)

@@ -39,6 +39,22 @@ DEMONSTRATION = "demonstration"
 LEARNER_NAMES = ("sgim-d", "saggriac", "demo-only", "random")
 
 
+def build_memory(config: LearnerConfig, action_dim: int,
+                 outcome_dim: int) -> tuple[Memory, InverseModel]:
+    """The (action, outcome) memory and the inverse model over it, as every learner has them
+    (the graph's explorer and evaluator build theirs with this too)."""
+    c = config
+    memory = Memory(action_dim, outcome_dim, c.memory_rebuild_fraction, c.memory_min_tail,
+                    c.memory_max_tail)
+    return memory, InverseModel(memory, c.l_max, c.k_max, c.alpha, c.interpolation_sigma)
+
+
+def inverse_or_centre(model: InverseModel, goal: np.ndarray, action_dim: int) -> np.ndarray:
+    """Inverse model's action; the centre of the action space when memory is empty."""
+    a = model(goal)
+    return np.zeros(action_dim) if a is None else a
+
+
 class Learner:
     """Common parts: memory, inverse model, movement counter."""
 
@@ -51,11 +67,7 @@ class Learner:
         self.action_dim = action_dim
         self.outcome_dim = outcome_dim
         self.rngs = RandomStreams.from_seed(seed)
-        c = self.config
-        self.memory = Memory(action_dim, outcome_dim, c.memory_rebuild_fraction,
-                             c.memory_min_tail, c.memory_max_tail)
-        self.inverse_model = InverseModel(self.memory, c.l_max, c.k_max, c.alpha,
-                                          c.interpolation_sigma)
+        self.memory, self.inverse_model = build_memory(self.config, action_dim, outcome_dim)
         self.n_movements = 0
         self.n_failures = 0
 
@@ -78,9 +90,7 @@ class Learner:
         """Ignored by non-social learners."""
 
     def inverse(self, goal: np.ndarray) -> np.ndarray:
-        """Inverse model's action; the centre of the action space when memory is empty."""
-        a = self.inverse_model(goal)
-        return np.zeros(self.action_dim) if a is None else a
+        return inverse_or_centre(self.inverse_model, goal, self.action_dim)
 
     def reached_outcomes(self) -> np.ndarray:
         return self.memory.outcomes

@@ -24,7 +24,7 @@ import numpy as np
 
 from .config import LearnerConfig
 from .environment import Environment, is_success
-from .evaluator import Evaluator
+from .evaluator import EVALUATION_SEED_OFFSET, Evaluator
 from .learners import LEARNER_NAMES, Learner, make_learner
 from .planar_arm import PlanarArm, benchmark_goals, teaching_set
 from .random_streams import component_rng
@@ -52,7 +52,7 @@ def build_world(name: str, seed: int, noise: float | None = None, arm_joints: in
     if name == "planar-arm":
         kw = {} if noise is None else {"noise": noise}
         env = PlanarArm(n_joints=arm_joints, seed=seed, **kw)
-        eval_env = PlanarArm(n_joints=arm_joints, seed=seed + 1_000_003, **kw)
+        eval_env = PlanarArm(n_joints=arm_joints, seed=seed + EVALUATION_SEED_OFFSET, **kw)
         ts = teaching_set(env, cells=arm_cells)
         return World(env, eval_env, benchmark_goals(env, cells=arm_cells), ts.actions,
                      ts.outcomes)
@@ -62,7 +62,8 @@ def build_world(name: str, seed: int, noise: float | None = None, arm_joints: in
 
         kw = {} if noise is None else {"noise": noise}
         ts = load_teaching_set()
-        return World(FishingWorld(seed=seed, **kw), FishingWorld(seed=seed + 1_000_003, **kw),
+        eval_world = FishingWorld(seed=seed + EVALUATION_SEED_OFFSET, **kw)
+        return World(FishingWorld(seed=seed, **kw), eval_world,
                      np.asarray(load_benchmark_goals(), dtype=float),
                      np.asarray(ts.actions, dtype=float), np.asarray(ts.outcomes, dtype=float))
     raise ValueError(f"unknown env {name!r}; choose one of {ENV_NAMES}")

@@ -1,0 +1,108 @@
+"""evaluator: measures the learner against the benchmark goals every `eval_every` movements.
+
+It rebuilds the learner's memory from the movement stream (and the demonstrations) and runs
+the core Evaluator with its OWN fishing world, so an evaluation never adds a movement, never
+touches the learner's memory or simulator, and sees exactly the memory the learner had after
+movement N. Evaluations happen at 0, at every multiple of `eval_every`, and at the run's last
+movement (announced on run_status).
+
+Interfaces:
+  subscribes  movements, demonstrations, run_status
+  publishes   evaluations (sgim_msgs/Evaluation)
+Parameters: the common ones, the memory and inverse-model fields of LearnerConfig, eval_every,
+noise (of the evaluator's world; default the world's).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from rclpy.node import Node
+
+from sgim_msgs.msg import Demonstration, Evaluation, Movement, RunStatus
+from sgim_nodes.core.evaluator import EVALUATION_SEED_OFFSET, Evaluator
+from sgim_nodes.core.learners import inverse_or_centre
+from sgim_nodes.movement_memory import MovementMemory
+from sgim_nodes.ros_glue import declare_learner, floats, run_node, vec
+from sgim_ros import qos
+from sgim_ros.params import Param, non_negative
+from sim_bridge.data_files import load_benchmark_goals
+from sim_bridge.fishing_world import DEFAULT_NOISE, FishingWorld
+
+
+class EvaluatorNode(Node):
+    def __init__(self) -> None:
+        super().__init__("evaluator")
+        values, config = declare_learner(self, (
+            Param("eval_every", 250, "movements between evaluations (paper: 250); 0 = only at "
+                  "the start and the end", non_negative, ">= 0"),
+            Param("noise", DEFAULT_NOISE, "motor-command noise of the evaluator's own world",
+                  non_negative, ">= 0"),
+        ))
+        self.every = values["eval_every"]
+        self.action_size = values["action_size"]
+        goals = load_benchmark_goals()
+        self.world = FishingWorld(seed=values["seed"] + EVALUATION_SEED_OFFSET,
+                                  noise=values["noise"])
+        self.evaluator = Evaluator(self.world, goals)
+        self.memory = MovementMemory(self, config, self.action_size, values["outcome_size"])
+        self.memory.before_store.append(self._before_movement)
+        self.memory.after_store.append(self._after_movement)
+        self.final: int | None = None
+        self.done: set[int] = set()
+        self._out = self.create_publisher(Evaluation, "evaluations", qos.RECORDS)
+        self.create_subscription(Demonstration, "demonstrations", self._on_demo, qos.RECORDS)
+        self.create_subscription(RunStatus, "run_status", self._on_status, qos.RECORDS)
+        self.get_logger().info(f"{len(goals)} benchmark goals, every {self.every} movements")
+
+    def _on_demo(self, msg: Demonstration) -> None:
+        if len(msg.action):
+            self.memory.add_demonstration_after(msg.movement_index, vec(msg.action),
+                                                vec(msg.outcome))
+
+    def _on_status(self, msg: RunStatus) -> None:
+        if 0 not in self.done:
+            self._evaluate(0)
+        if msg.movement_index == msg.total_movements:
+            self.final = msg.total_movements
+            if self.memory.count >= self.final:
+                self._evaluate(self.final)
+
+    def _before_movement(self, msg: Movement) -> None:
+        if 0 not in self.done:
+            self._evaluate(0)
+
+    def _after_movement(self, msg: Movement) -> None:
+        n = msg.index
+        if (self.every and n % self.every == 0) or n == self.final:
+            self._evaluate(n)
+
+    def _evaluate(self, count: int) -> None:
+        if count in self.done:
+            return
+        self.done.add(count)
+        start = time.perf_counter()
+        result = self.evaluator.evaluate(
+            lambda goal: inverse_or_centre(self.memory.inverse_model, goal, self.action_size))
+        goals = self.evaluator.goals
+        self._out.publish(Evaluation(
+            stamp=self.get_clock().now().to_msg(), movement_index=count,
+            mean_distance=result.mean_distance, outcome_size=goals.shape[1],
+            goals=floats(goals), reached=floats(result.reached),
+            distances=floats(result.distances)))
+        self.get_logger().info(f"evaluation at {count}: mean distance "
+                               f"{result.mean_distance:.4f} ({int(np.sum(result.failed))} "
+                               f"failed, {time.perf_counter() - start:.1f} s)")
+
+    def destroy_node(self) -> None:
+        self.world.close()
+        super().destroy_node()
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(EvaluatorNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

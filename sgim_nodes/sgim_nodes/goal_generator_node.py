@@ -1,0 +1,90 @@
+"""goal_generator: self-generated goals by the three SAGG-RIAC modes, from the region map.
+
+The arbiter asks for each goal through `choose_goal`, saying how many attempted goals the map
+must already reflect; the answer waits for that map, so the choice never depends on message
+timing, and the random stream "goals" makes it the very goal the single-process learner draws.
+
+Interfaces:
+  subscribes  region_map  (sgim_msgs/RegionMap)
+  publishes   goals       (sgim_msgs/Goal)
+  serves      choose_goal (sgim_msgs/srv/ChooseGoal)
+Parameters: the common ones, p_mode1..3 and mode3_radius of LearnerConfig, map_timeout.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from rclpy.task import Future
+
+from sgim_msgs.msg import Goal, RegionMap
+from sgim_msgs.srv import ChooseGoal
+from sgim_nodes.core.goal_selection import GoalSelector
+from sgim_nodes.core.random_streams import component_rng
+from sgim_nodes.core.region_snapshot import RegionSnapshot
+from sgim_nodes.ros_glue import AsyncNode, declare_learner, floats, run_node, snapshot_from_msg
+from sgim_ros import qos
+from sgim_ros.params import Param, positive
+
+MODE_CODES = {1: Goal.MODE_INTEREST_REGION, 2: Goal.MODE_UNIFORM, 3: Goal.MODE_LEAST_COMPETENT}
+
+
+class GoalGenerator(AsyncNode):
+    def __init__(self) -> None:
+        super().__init__("goal_generator")
+        values, c = declare_learner(self, (
+            Param("map_timeout", 60.0, "seconds to wait for a region map that reflects the "
+                  "requested number of goals", positive, "> 0"),
+        ))
+        self.timeout = values["map_timeout"]
+        self.rng = component_rng(values["seed"], "goals")
+        self.probabilities = (c.p_mode1, c.p_mode2, c.p_mode3)
+        self.radius = c.mode3_radius
+        self.snapshot: RegionSnapshot | None = None
+        self.goal_count = 0
+        self._waiters: list[tuple[int, Future]] = []
+        self._goals = self.create_publisher(Goal, "goals", qos.RECORDS)
+        self.create_subscription(RegionMap, "region_map", self._on_map, qos.LATEST_STATE)
+        self.create_service(ChooseGoal, "choose_goal", self._choose)
+
+    def _on_map(self, msg: RegionMap) -> None:
+        if self.snapshot is not None and msg.goal_count < self.snapshot.goal_count:
+            return  # an older map arriving late never replaces a newer one
+        self.snapshot = snapshot_from_msg(msg)
+        for needed, future in list(self._waiters):
+            if self.snapshot.goal_count >= needed and not future.done():
+                future.set_result(True)
+        self._waiters = [(n, f) for n, f in self._waiters if not f.done()]
+
+    async def _choose(self, request: ChooseGoal.Request, response: ChooseGoal.Response):
+        if self.snapshot is None or self.snapshot.goal_count < request.min_goal_count:
+            ready = Future(executor=self.executor)
+            self._waiters.append((request.min_goal_count, ready))
+            timer = self.create_timer(self.timeout, lambda: ready.done() or ready.set_result(False))
+            ok = await ready
+            self.destroy_timer(timer)
+            if not ok:
+                have = -1 if self.snapshot is None else self.snapshot.goal_count
+                response.ok = False
+                response.message = (f"no region map with {request.min_goal_count} goals after "
+                                    f"{self.timeout} s (latest has {have}): is interest_computer "
+                                    "running?")
+                return response
+        snap = self.snapshot
+        choice = GoalSelector(snap, self.probabilities, self.radius).sample(self.rng)
+        self.goal_count += 1
+        leaf = next((r for r in snap.leaves if np.all(choice.goal >= r.low)
+                     and np.all(choice.goal <= r.high)), None)
+        goal = Goal(stamp=self.get_clock().now().to_msg(), index=self.goal_count,
+                    movement_index=request.movement_index, point=floats(choice.goal),
+                    region_id=-1 if leaf is None else leaf.id, mode=MODE_CODES[choice.mode])
+        self._goals.publish(goal)
+        response.ok, response.goal = True, goal
+        return response
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(GoalGenerator, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,255 @@
+"""Run one learning experiment through the node graph and leave one bag per run.
+
+Starts every node of the graph as its own process (the way `ros2 run` does), in a ROS domain
+of its own with discovery kept on this host, shows the run's progress, waits for its end,
+stops every node cleanly and writes the run's metadata beside its bag:
+
+    runs/<learner>-seed<N>-<time>/
+        bag/            the rosbag2 recording (MCAP), every topic of the run
+        params.yaml     the parameters every node was started with
+        metadata.yaml   learner, seed, parameters, versions, timing, how it ended
+        logs/           one log per node
+
+Ctrl-C stops every node (the recorder closes its bag, which stays readable).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import platform
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Sequence
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from sgim_nodes.core.learners import LEARNER_NAMES
+from sgim_nodes.graph.domain import isolated_ros_environment, reserve_domain
+from sgim_nodes.graph.processes import ProcessGroup
+
+REPO = Path(__file__).resolve().parents[3]
+ROS2RUN = REPO / "ros_ws" / "ros2run.sh"
+LEARNER_CONFIG = REPO / "sgim_nodes" / "config" / "learner.yaml"
+SOCIAL = ("sgim-d", "demo-only")
+
+
+def nodes_for(learner: str, teacher: str) -> list[tuple[str, str]]:
+    """(package, executable) of every node the learner needs, the arbiter last."""
+    nodes = [("sgim_nodes", "recorder"), ("sim_bridge", "sim_bridge"),
+             ("sgim_nodes", "evaluator")]
+    if learner in ("sgim-d", "saggriac"):
+        nodes += [("sgim_nodes", "interest_computer"), ("sgim_nodes", "goal_generator"),
+                  ("sgim_nodes", "low_level_explorer")]
+    if learner in SOCIAL:
+        nodes.append(("sgim_nodes", "imitation"))
+        if teacher == "automatic":
+            nodes.append(("teacher", "teacher"))
+    nodes.append(("sgim_nodes", "social_interaction"))
+    return nodes
+
+
+def parameters(args: argparse.Namespace, run_dir: Path) -> dict[str, Any]:
+    """Every node reads the same file: the learner defaults, then this run's choices."""
+    values = dict(yaml.safe_load(LEARNER_CONFIG.read_text())["/**"]["ros__parameters"])
+    for item in args.param:
+        name, _, text = item.partition("=")
+        if not name or not _:
+            raise SystemExit(f"--param expects NAME=VALUE, got {item!r}")
+        values[name] = yaml.safe_load(text)
+    values.update(learner=args.learner, seed=args.seed, movements=args.movements,
+                  eval_every=args.eval_every, demonstration_period=args.period,
+                  teacher=args.teacher if args.learner in SOCIAL else "none",
+                  output=str(run_dir / "bag"), storage=args.storage)
+    return values
+
+
+def versions() -> dict[str, str]:
+    from importlib import metadata
+
+    found = {"python": platform.python_version(), "platform": platform.platform()}
+    for dist in ("ros-jazzy-rclpy", "pybullet", "numpy", "scipy", "rosbags"):
+        try:
+            found[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            found[dist] = "absent"
+    try:
+        found["git_commit"] = subprocess.run(
+            ["git", "-C", str(REPO), "describe", "--always", "--dirty"], capture_output=True,
+            text=True, timeout=10).stdout.strip() or "unknown"
+    except (OSError, subprocess.SubprocessError):
+        found["git_commit"] = "unknown"
+    return found
+
+
+def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(
+        prog="ros_ws/run_experiment.sh",
+        description="Run one learner through the ROS 2 node graph and record the run to a bag "
+                    "in runs/. Example: ros_ws/run_experiment.sh sgim-d --seed 3 "
+                    "--movements 5000")
+    p.add_argument("learner", choices=LEARNER_NAMES, help="which learner to run")
+    p.add_argument("--seed", type=int, default=0, help="seed of the run (default: 0)")
+    p.add_argument("--movements", type=int, default=5000,
+                   help="movement budget; the paper's is 5000 (default: %(default)s)")
+    p.add_argument("--eval-every", type=int, default=250,
+                   help="movements between evaluations; paper 250 (default: %(default)s)")
+    p.add_argument("--period", type=int, default=150,
+                   help="movements between demonstrations; paper 150 (default: %(default)s)")
+    p.add_argument("--teacher", choices=("automatic", "human"), default="automatic",
+                   help="automatic teacher node, or you at the human_input prompt")
+    p.add_argument("--runs-dir", type=Path, default=REPO / "runs",
+                   help="where the run folder is made (default: runs/)")
+    p.add_argument("--name", help="run folder name (default: <learner>-seed<N>-<time>)")
+    p.add_argument("--storage", choices=("mcap", "sqlite3"), default="mcap",
+                   help="bag storage (default: mcap)")
+    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="override any node parameter, e.g. --param goal_budget=20")
+    p.add_argument("--timeout", type=float, default=0,
+                   help="abort the run after this many seconds (default: none)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    args = p.parse_args(argv)
+    for name in ("movements", "period"):
+        if getattr(args, name) < 1:
+            p.error(f"--{name} must be >= 1")
+    if args.seed < 0 or args.eval_every < 0:
+        p.error("--seed and --eval-every must be >= 0")
+    return args
+
+
+class Progress:
+    """Follows run_status with a small rclpy node of the launcher's own."""
+
+    def __init__(self, total: int, quiet: bool) -> None:
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.node import Node
+        from tqdm import tqdm
+
+        from sgim_msgs.msg import RunStatus
+        from sgim_ros import qos
+
+        self.rclpy = rclpy
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context)
+        self.node = Node("experiment_launcher", context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.state: int | None = None
+        self.message = ""
+        self.bar = tqdm(total=total, disable=quiet, unit="mv", file=sys.stderr)
+        self.node.create_subscription(RunStatus, "run_status", self._on_status, qos.RECORDS)
+        self.finished_state = (RunStatus.STATE_FINISHED, RunStatus.STATE_ABORTED)
+        self.ok_state = RunStatus.STATE_FINISHED
+
+    def _on_status(self, msg) -> None:
+        self.bar.update(max(0, msg.movement_index - self.bar.n))
+        self.state, self.message = msg.state, msg.message
+
+    def spin(self, seconds: float) -> None:
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.05)
+
+    @property
+    def over(self) -> bool:
+        return self.state in self.finished_state
+
+    def close(self) -> None:
+        self.bar.close()
+        self.executor.shutdown()
+        self.node.destroy_node()
+        self.rclpy.try_shutdown(context=self.context)
+
+
+def run(args: argparse.Namespace) -> int:
+    stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
+    run_dir = args.runs_dir / (args.name or f"{args.learner}-seed{args.seed}-{stamp}")
+    if run_dir.exists():
+        print(f"run_experiment: {run_dir} exists; choose another --name", file=sys.stderr)
+        return 2
+    (run_dir / "logs").mkdir(parents=True)
+    params = parameters(args, run_dir)
+    params_file = run_dir / "params.yaml"
+    params_file.write_text(yaml.safe_dump({"/**": {"ros__parameters": params}}))
+    reservation = reserve_domain()
+    env = isolated_ros_environment(reservation.domain_id)
+    os.environ.update(env)  # the launcher's own progress node joins the run's domain
+    meta: dict[str, Any] = {
+        "learner": args.learner, "seed": args.seed, "movements": args.movements,
+        "teacher": params["teacher"], "ros_domain_id": reservation.domain_id,
+        "started": datetime.now(UTC).isoformat(), "parameters": params, "versions": versions(),
+    }
+    (run_dir / "metadata.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
+    nodes = nodes_for(args.learner, params["teacher"])
+    print(f"run_experiment: {args.learner}, seed {args.seed}, {args.movements} movements, "
+          f"domain {reservation.domain_id}, {len(nodes)} nodes -> {run_dir}", file=sys.stderr)
+    group = ProcessGroup(env=env, log_dir=run_dir / "logs")
+    progress = human = None
+    outcome, code = "unknown", 1
+    started = time.monotonic()
+    interrupted = False
+    previous = signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt))
+    try:
+        progress = Progress(args.movements, args.quiet)
+        for package, executable in nodes:
+            group.start(executable, [str(ROS2RUN), package, executable, "--ros-args",
+                                     "--params-file", str(params_file)])
+        if params["teacher"] == "human" and args.learner in SOCIAL:
+            human = subprocess.Popen([str(ROS2RUN), "teacher", "human_input", "--ros-args",
+                                      "--params-file", str(params_file)], env=env)
+        arbiter, recorder = group.children[-1], group.children[0]
+        while True:
+            progress.spin(0.2)
+            dead = [c for c in group.children if c.poll() is not None and c is not arbiter
+                    and c is not recorder]
+            if arbiter.poll() is not None or progress.over:
+                break
+            if recorder.poll() is not None:
+                raise RuntimeError(f"the recorder stopped (exit {recorder.returncode}); see "
+                                   f"{run_dir / 'logs' / 'recorder.log'}")
+            if dead:
+                names = [nodes[group.children.index(c)][1] for c in dead]
+                raise RuntimeError(f"node(s) {names} stopped; see {run_dir / 'logs'}")
+            if args.timeout and time.monotonic() - started > args.timeout:
+                raise RuntimeError(f"timed out after {args.timeout:g} s")
+        arbiter.wait(timeout=60)
+        outcome = "finished" if progress.state == progress.ok_state else (
+            f"aborted: {progress.message}")
+        code = 0 if progress.state == progress.ok_state else 1
+        # the recorder ends by itself once it has written the end of the run
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            recorder.wait(timeout=30)
+    except KeyboardInterrupt:
+        interrupted, outcome, code = True, "interrupted by the user", 130
+    except RuntimeError as error:
+        outcome, code = f"failed: {error}", 1
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        if progress is not None:
+            progress.close()
+        group.stop_all()
+        if human is not None and human.poll() is None:
+            human.terminate()
+        reservation.release()
+        meta.update(ended=datetime.now(UTC).isoformat(), outcome=outcome,
+                    duration_s=round(time.monotonic() - started, 2))
+        (run_dir / "metadata.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
+    print(f"run_experiment: {outcome}; bag and metadata in {run_dir}"
+          + (" (interrupted: the bag holds what was recorded)" if interrupted else ""),
+          file=sys.stderr)
+    return code
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    return run(parse_args(argv))
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

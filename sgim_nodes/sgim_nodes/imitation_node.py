@@ -1,0 +1,97 @@
+"""imitation: repeats a demonstrated action with small random variations.
+
+Each `imitate` job is one core Imitation (a_demo + a_rand, |a_rand| < imitation_epsilon)
+driven movement by movement through the simulator's `execute_action` service, recorded as
+imitation movements aimed at the demonstrated outcome. A cancel is honoured at the next
+movement boundary.
+
+Interfaces:
+  subscribes  movements      (sgim_msgs/Movement; only to recognise a movement recorded just
+                              before a simulator crash)
+  action      imitate        (sgim_msgs/action/Imitate)
+  client of   execute_action (sgim_msgs/srv/ExecuteAction)
+Parameters: the common ones, imitation_count and imitation_epsilon of LearnerConfig,
+service_timeout.
+"""
+
+from __future__ import annotations
+
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+
+from sgim_msgs.action import Imitate
+from sgim_msgs.msg import Movement
+from sgim_msgs.srv import ExecuteAction
+from sgim_nodes.core.environment import MovementResult
+from sgim_nodes.core.imitation import Imitation
+from sgim_nodes.core.random_streams import component_rng
+from sgim_nodes.ros_glue import AsyncNode, check_vector, declare_learner, floats, run_node, vec
+from sgim_nodes.sim_client import RecentMovements, SimClient
+from sgim_ros import qos
+from sgim_ros.params import Param, positive
+
+
+class ImitationNode(AsyncNode):
+    def __init__(self) -> None:
+        super().__init__("imitation")
+        values, self.config = declare_learner(self, (
+            Param("service_timeout", 30.0, "seconds to wait for the simulator before a retry",
+                  positive, "> 0"),
+        ))
+        self.action_size, self.outcome_size = values["action_size"], values["outcome_size"]
+        self.rng = component_rng(values["seed"], "imitation")
+        recent = RecentMovements()
+        self.create_subscription(Movement, "movements", recent.add, qos.RECORDS)
+        self.sim = SimClient(self, values["service_timeout"], recent.recorded)
+        self.busy = False
+        self._server = ActionServer(
+            self, Imitate, "imitate", execute_callback=self._imitate,
+            goal_callback=lambda _: GoalResponse.REJECT if self.busy else GoalResponse.ACCEPT,
+            cancel_callback=lambda _: CancelResponse.ACCEPT)
+
+    async def _imitate(self, handle) -> Imitate.Result:
+        self.busy = True
+        try:
+            return await self._run(handle)
+        finally:
+            self.busy = False
+
+    async def _run(self, handle) -> Imitate.Result:
+        request: Imitate.Goal = handle.request
+        result = Imitate.Result(best_distance=float("inf"))
+        why = (check_vector(request.action, self.action_size, "demonstrated action", 1.0)
+               or check_vector(request.outcome, self.outcome_size, "demonstrated outcome"))
+        if why:
+            self.get_logger().error(f"refused an imitation: {why}")
+            handle.abort()
+            return result
+        count = request.repetitions or self.config.imitation_count
+        job = Imitation(vec(request.action), vec(request.outcome), count,
+                        self.config.imitation_epsilon, self.rng)
+        while not job.done:
+            if handle.is_cancel_requested:
+                result.cancelled = True
+                break
+            action, _ = job.next_action()
+            response = await self.sim.execute(ExecuteAction.Request(
+                action=floats(action), process=Movement.PROCESS_IMITATION,
+                movement_index=request.movements_before + job.movements + 1,
+                goal=list(request.outcome), record=True))
+            outcome = vec(response.outcome) if len(response.outcome) else None
+            job.observe(action, MovementResult(outcome, response.status))
+            handle.publish_feedback(Imitate.Feedback(movements_done=job.movements))
+        result.movements_used = job.movements
+        result.best_outcome = floats(job.best_outcome)
+        result.best_distance = job.best_distance
+        if result.cancelled:
+            handle.canceled()
+        else:
+            handle.succeed()
+        return result
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(ImitationNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,62 @@
+"""interest_computer: folds competence records into the region tree and publishes its map.
+
+Competences come in order (keep-all QoS) and each is added to the core RegionTree, which
+splits regions as they fill; after every record the whole map is published (latest-state
+QoS), with the number of goals folded in, so that the goal generator can wait for the map
+that reflects every goal attempted so far.
+
+Interfaces:
+  subscribes  competences (sgim_msgs/Competence)
+  publishes   region_map  (sgim_msgs/RegionMap)
+Parameters: the common ones and the region-tree ones of LearnerConfig (see README).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from rclpy.node import Node
+
+from sgim_msgs.msg import Competence, RegionMap
+from sgim_nodes.core.competence import OUTCOME_HIGH, OUTCOME_LOW
+from sgim_nodes.core.region_snapshot import RegionIds, snapshot
+from sgim_nodes.core.region_tree import RegionTree
+from sgim_nodes.ros_glue import check_vector, declare_learner, region_map_msg, run_node, vec
+from sgim_ros import qos
+
+
+class InterestComputer(Node):
+    def __init__(self) -> None:
+        super().__init__("interest_computer")
+        values, c = declare_learner(self)
+        self.outcome_size = values["outcome_size"]
+        self.tree = RegionTree(np.full(self.outcome_size, OUTCOME_LOW),
+                               np.full(self.outcome_size, OUTCOME_HIGH), c.max_goals_per_region,
+                               c.zeta, c.min_goals_per_child, c.min_region_width)
+        self.ids = RegionIds()
+        self.goal_count = 0
+        self._map = self.create_publisher(RegionMap, "region_map", qos.LATEST_STATE)
+        self.create_subscription(Competence, "competences", self._on_competence, qos.RECORDS)
+        self._publish(0)
+
+    def _on_competence(self, msg: Competence) -> None:
+        why = check_vector(msg.goal, self.outcome_size, "goal", bound=1.0)
+        if not why and not -1.0 <= msg.competence <= 0.0:
+            why = f"competence must lie in [-1, 0], got {msg.competence}"
+        if why:
+            self.get_logger().error(f"ignored competence record {msg.goal_index}: {why}")
+            return
+        self.tree.add(vec(msg.goal), float(msg.competence))
+        self.goal_count += 1
+        self._publish(msg.movement_index)
+
+    def _publish(self, movement_index: int) -> None:
+        snap = snapshot(self.tree, self.ids, self.goal_count)
+        self._map.publish(region_map_msg(snap, movement_index, self.get_clock().now().to_msg()))
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(InterestComputer, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

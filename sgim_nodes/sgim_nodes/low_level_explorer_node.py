@@ -1,0 +1,134 @@
+"""low_level_explorer: reaches one goal at a time (inverse model, Nelder-Mead, exploration).
+
+Each `reach_goal` job is one core GoalAttempt driven movement by movement: its actions are
+executed through the simulator's `execute_action` service, and the job waits until each
+movement has come back on the `movements` stream into its memory before the next step, as the
+single-process learner would. A cancel (the arbiter preempting for a demonstration) is
+honoured at the next movement boundary; the movement under way always completes. The
+attempt's competence is published on `competences` whenever it spent a movement.
+
+Interfaces:
+  subscribes  movements              (sgim_msgs/Movement)
+  publishes   competences            (sgim_msgs/Competence)
+  serves      register_demonstration (sgim_msgs/srv/RegisterDemonstration)
+  action      reach_goal             (sgim_msgs/action/ReachGoal)
+  client of   execute_action         (sgim_msgs/srv/ExecuteAction)
+Parameters: the common ones and every LearnerConfig field; service_timeout.
+"""
+
+from __future__ import annotations
+
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+
+from sgim_msgs.action import ReachGoal
+from sgim_msgs.msg import Competence
+from sgim_msgs.srv import ExecuteAction, RegisterDemonstration
+from sgim_nodes.core.competence import competence, origin_vector
+from sgim_nodes.core.environment import MovementResult
+from sgim_nodes.core.goal_reaching import GoalAttempt
+from sgim_nodes.core.random_streams import component_rng
+from sgim_nodes.movement_memory import MovementMemory
+from sgim_nodes.ros_glue import (
+    PROCESS_CODES,
+    AsyncNode,
+    check_vector,
+    declare_learner,
+    floats,
+    run_node,
+    vec,
+)
+from sgim_nodes.sim_client import SimClient
+from sgim_ros import qos
+from sgim_ros.params import Param, positive
+
+
+class LowLevelExplorer(AsyncNode):
+    def __init__(self) -> None:
+        super().__init__("low_level_explorer")
+        values, self.config = declare_learner(self, (
+            Param("service_timeout", 30.0, "seconds to wait for the simulator before a retry",
+                  positive, "> 0"),
+        ))
+        self.action_size, self.outcome_size = values["action_size"], values["outcome_size"]
+        self.rng = component_rng(values["seed"], "explorer")
+        self.origin = origin_vector(self.config.origin, self.outcome_size)
+        self.memory = MovementMemory(self, self.config, self.action_size, self.outcome_size)
+        self.sim = SimClient(self, values["service_timeout"], self.memory.recorded)
+        self.busy = False
+        self._competences = self.create_publisher(Competence, "competences", qos.RECORDS)
+        self.create_service(RegisterDemonstration, "register_demonstration", self._register)
+        self._server = ActionServer(
+            self, ReachGoal, "reach_goal", execute_callback=self._reach,
+            goal_callback=lambda _: GoalResponse.REJECT if self.busy else GoalResponse.ACCEPT,
+            cancel_callback=lambda _: CancelResponse.ACCEPT)
+
+    def _register(self, request: RegisterDemonstration.Request,
+                  response: RegisterDemonstration.Response):
+        demo = request.demonstration
+        why = self.memory.add_demonstration(vec(demo.action), vec(demo.outcome))
+        response.accepted, response.message = not why, why
+        if why:
+            self.get_logger().error(f"refused demonstration {demo.index}: {why}")
+        return response
+
+    async def _reach(self, handle) -> ReachGoal.Result:
+        self.busy = True
+        try:
+            return await self._attempt(handle)
+        finally:
+            self.busy = False
+
+    async def _attempt(self, handle) -> ReachGoal.Result:
+        request: ReachGoal.Goal = handle.request
+        result = ReachGoal.Result(competence=-1.0)
+        why = check_vector(request.goal, self.outcome_size, "goal", bound=1.0)
+        if why:
+            self.get_logger().error(f"refused goal {request.goal_index}: {why}")
+            handle.abort()
+            return result
+        await self.memory.reached(request.movements_before)
+        goal = vec(request.goal)
+        attempt = GoalAttempt(goal, self.memory.memory, self.memory.inverse_model, self.config,
+                              self.rng, self.action_size)
+        used = 0
+        while not attempt.done:
+            if handle.is_cancel_requested:
+                result.cancelled = True
+                break
+            if request.max_movements and used >= request.max_movements:
+                break
+            action, label = attempt.next_action()
+            index = request.movements_before + used + 1
+            response = await self.sim.execute(ExecuteAction.Request(
+                action=floats(action), process=PROCESS_CODES[label], movement_index=index,
+                goal=floats(goal), goal_index=request.goal_index, record=True))
+            used += 1
+            await self.memory.reached(index)
+            outcome = vec(response.outcome) if len(response.outcome) else None
+            attempt.observe(action, MovementResult(outcome, response.status))
+            handle.publish_feedback(ReachGoal.Feedback(movements_done=used,
+                                                       best_distance=attempt.best_distance))
+        result.movements_used = used
+        result.reached = floats(attempt.best_outcome)
+        if attempt.best_outcome is not None:
+            result.competence = competence(goal, attempt.best_outcome, self.origin,
+                                           self.config.eps_sim)
+        if used > 0:  # an attempted goal, even an interrupted one, counts for the interest
+            self._competences.publish(Competence(
+                stamp=self.get_clock().now().to_msg(), goal_index=request.goal_index,
+                movement_index=request.movements_before + used, goal=floats(goal),
+                reached=result.reached, competence=result.competence, movements_used=used,
+                from_demonstration=False))
+        if result.cancelled:
+            handle.canceled()
+        else:
+            handle.succeed()
+        return result
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(LowLevelExplorer, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

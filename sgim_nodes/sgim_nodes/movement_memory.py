@@ -1,0 +1,102 @@
+"""The learner's memory fed by the recorded movement stream, with a wait for a movement count.
+
+The explorer and the evaluator each hold a copy of the learner's memory, built from the one
+stream every movement goes through (`movements`, in order, nothing dropped). A job that must
+see the memory after movement N awaits `reached(N)`: the same memory the single-process
+learner would have at that point, whatever the message timing.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from rclpy.node import Node
+from rclpy.task import Future
+
+from sgim_msgs.msg import Movement
+from sgim_nodes.core.config import LearnerConfig
+from sgim_nodes.core.learners import DEMONSTRATION, build_memory
+from sgim_nodes.ros_glue import PROCESS_LABELS, check_vector, vec
+from sgim_nodes.sim_client import RecentMovements
+from sgim_ros import qos
+
+
+class MovementMemory:
+    """Subscribes `movements` on `node`; holds the Memory and InverseModel of the learner."""
+
+    def __init__(self, node: Node, config: LearnerConfig, action_size: int,
+                 outcome_size: int) -> None:
+        self.node = node
+        self.action_size, self.outcome_size = action_size, outcome_size
+        self.memory, self.inverse_model = build_memory(config, action_size, outcome_size)
+        self.count = 0  # highest learner movement index seen
+        self.before_store: list = []  # called with each learner Movement before it is stored
+        self.after_store: list = []  # ... and after (then memory holds it)
+        self._deferred: list[tuple[int, np.ndarray, np.ndarray]] = []
+        self._recent = RecentMovements()
+        self._waiters: list[tuple[int, Future]] = []
+        node.create_subscription(Movement, "movements", self._on_movement, qos.RECORDS)
+
+    def _on_movement(self, msg: Movement) -> None:
+        if msg.process == Movement.PROCESS_EVALUATION or msg.index == 0:
+            return  # evaluation movements are not the learner's experience
+        if msg.index <= self.count:
+            self.node.get_logger().warning(f"movement {msg.index} seen twice; ignored")
+            return
+        for listener in self.before_store:
+            listener(msg)
+        if msg.status == Movement.STATUS_OK:
+            why = (check_vector(msg.action, self.action_size, "action", 1.0)
+                   or check_vector(msg.outcome, self.outcome_size, "outcome"))
+            if why:
+                self.node.get_logger().error(f"movement {msg.index} not stored: {why}")
+            else:
+                self.memory.add(vec(msg.action), vec(msg.outcome),
+                                PROCESS_LABELS.get(msg.process, ""))
+        self.count = msg.index
+        self._recent.add(msg)
+        for listener in self.after_store:
+            listener(msg)
+        self._store_deferred()
+        for needed, future in self._waiters:
+            if needed <= self.count and not future.done():
+                future.set_result(True)
+        self._waiters = [(n, f) for n, f in self._waiters if not f.done()]
+
+    def add_demonstration(self, action: np.ndarray, outcome: np.ndarray) -> str:
+        """Store a demonstration as the learner's own experience; '' or why it was refused."""
+        why = (check_vector(action, self.action_size, "demonstration action", 1.0)
+               or check_vector(outcome, self.outcome_size, "demonstration outcome"))
+        if not why:
+            self.memory.add(vec(action), vec(outcome), DEMONSTRATION)
+        return why
+
+    def add_demonstration_after(self, movement_index: int, action: np.ndarray,
+                                outcome: np.ndarray) -> None:
+        """Store a demonstration given at `movement_index` once that movement is in memory
+        (and its listeners ran), as the learner itself received it between two movements."""
+        self._deferred.append((movement_index, action, outcome))
+        self._store_deferred()
+
+    def _store_deferred(self) -> None:
+        keep = []
+        for index, action, outcome in self._deferred:
+            if index <= self.count:
+                why = self.add_demonstration(action, outcome)
+                if why:
+                    self.node.get_logger().error(f"demonstration not stored: {why}")
+            else:
+                keep.append((index, action, outcome))
+        self._deferred = keep
+
+    def recorded(self, index: int) -> Movement | None:
+        """The record of a recent movement, if it came in (see SimClient)."""
+        return self._recent.recorded(index)
+
+    def reached(self, count: int) -> Future:
+        """A future done once every movement up to `count` is in memory."""
+        future = Future(executor=self.node.executor)
+        if count <= self.count:
+            future.set_result(True)
+        else:
+            self._waiters.append((count, future))
+        return future

@@ -1,0 +1,169 @@
+"""What every learner node shares: message <-> numpy conversions, the learner parameters and
+the node entry point. Only translation lives here; the algorithms stay in `core`.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import fields
+from typing import Any
+
+import numpy as np
+import rclpy
+from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+
+from sgim_msgs.msg import Movement, Region, RegionMap
+from sgim_nodes.core.config import LearnerConfig
+from sgim_nodes.core.learners import LEARNER_NAMES
+from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
+from sgim_ros.params import Param, ParameterError, declare, one_of
+
+# Core process labels <-> Movement.PROCESS_* codes.
+PROCESS_CODES = {
+    "goal_directed": Movement.PROCESS_GOAL_DIRECTED,
+    "exploration": Movement.PROCESS_EXPLORATION,
+    "imitation": Movement.PROCESS_IMITATION,
+    "demonstration": Movement.PROCESS_DEMONSTRATION,
+    "random": Movement.PROCESS_RANDOM,
+    "evaluation": Movement.PROCESS_EVALUATION,
+}
+PROCESS_LABELS = {code: label for label, code in PROCESS_CODES.items()}
+
+ACTION_SIZE = 24  # the fishing world's; a parameter of every node that checks sizes
+OUTCOME_SIZE = 2
+
+
+class AsyncNode(Node):
+    """A node whose callbacks may `await` (service calls, actions, timers, other messages).
+
+    rclpy runs the callbacks of one mutually exclusive group one at a time, and a coroutine
+    that awaits keeps its group busy: with the default group, the reply it awaits could never
+    be processed (the deadlock noted in shared/notes/ros2-from-pypi.md). A reentrant default
+    group lets other callbacks run while one awaits; with the single-threaded executor they
+    still never run in parallel, they only interleave at `await` points.
+    """
+
+    def __init__(self, name: str, **kwargs: Any) -> None:
+        super().__init__(name, **kwargs)
+        self._default_callback_group = ReentrantCallbackGroup()
+
+
+def vec(values: Sequence[float]) -> np.ndarray:
+    return np.asarray(values, dtype=float)
+
+
+def floats(array: np.ndarray | Sequence[float] | None) -> list[float]:
+    return [] if array is None else [float(v) for v in np.asarray(array, dtype=float).ravel()]
+
+
+def check_vector(values: Sequence[float], size: int, what: str, bound: float | None = None) -> str:
+    """Why a vector from a message is unusable, or '' when it is fine."""
+    v = np.asarray(values, dtype=float)
+    if v.shape != (size,):
+        return f"{what} must have {size} numbers, got {v.size}"
+    if not np.all(np.isfinite(v)):
+        return f"{what} has NaN or infinite numbers"
+    if bound is not None and np.any(np.abs(v) > bound):
+        return f"{what} numbers must lie in [-{bound:g}, {bound:g}]"
+    return ""
+
+
+COMMON_PARAMS = (
+    Param("learner", "sgim-d", "which learner the graph runs", one_of(*LEARNER_NAMES),
+          f"one of {', '.join(LEARNER_NAMES)}"),
+    Param("seed", 0, "seed of the run; each node derives its own random stream from it",
+          lambda v: v >= 0, ">= 0"),
+    Param("action_size", ACTION_SIZE, "numbers per action (the world's action size)",
+          lambda v: v >= 1, ">= 1"),
+    Param("outcome_size", OUTCOME_SIZE, "numbers per outcome (the world's outcome size)",
+          lambda v: v >= 1, ">= 1"),
+)
+
+
+def learner_params() -> tuple[Param, ...]:
+    """One ROS parameter per LearnerConfig field (origin excepted: the space's centre), with
+    the documented default; LearnerConfig itself checks the values together."""
+    default = LearnerConfig()
+    return tuple(
+        Param(f.name, getattr(default, f.name), f"see LearnerConfig.{f.name} in core/config.py")
+        for f in fields(LearnerConfig)
+        if f.name != "origin"
+    )
+
+
+def declare_learner(node: Node, extra: Sequence[Param] = ()) -> tuple[dict[str, Any],
+                                                                         LearnerConfig]:
+    """Declare the common, learner and node-specific parameters; return them and the config."""
+    values = declare(node, (*COMMON_PARAMS, *learner_params(), *extra))
+    names = {f.name for f in fields(LearnerConfig)}
+    try:
+        config = LearnerConfig(**{k: v for k, v in values.items() if k in names})
+    except ValueError as error:
+        raise ParameterError(str(error)) from error
+    return values, config
+
+
+def region_map_msg(snap: RegionSnapshot, movement_index: int, stamp) -> RegionMap:
+    return RegionMap(
+        stamp=stamp,
+        movement_index=movement_index,
+        split_count=snap.split_count,
+        goal_count=snap.goal_count,
+        regions=[
+            Region(
+                id=r.id,
+                parent_id=r.parent_id,
+                lower=floats(r.low),
+                upper=floats(r.high),
+                interest=r.interest,
+                goal_count=r.goal_count,
+                is_leaf=r.is_leaf,
+                least_competent_goal=floats(r.least_competent_goal),
+            )
+            for r in snap.regions
+        ],
+    )
+
+
+def snapshot_from_msg(msg: RegionMap) -> RegionSnapshot:
+    return RegionSnapshot(
+        [
+            RegionSummary(
+                r.id, r.parent_id, vec(r.lower), vec(r.upper), r.interest, r.goal_count,
+                r.is_leaf, vec(r.least_competent_goal) if len(r.least_competent_goal) else None,
+            )
+            for r in msg.regions
+        ],
+        msg.goal_count,
+        msg.split_count,
+    )
+
+
+def run_node(factory: Callable[[], Node], args: list[str] | None = None) -> int:
+    """Create and spin one node; a bad parameter ends it with exit code 2 and a clear message.
+
+    Ctrl-C and external shutdown end it cleanly; a node may also end the spin by itself by
+    setting `node.finished = True` (with `node.exit_code`).
+    """
+    rclpy.init(args=args)
+    try:
+        node = factory()
+    except (ParameterError, ValueError, FileNotFoundError) as error:
+        print(f"[{factory.__name__}] {error}", file=sys.stderr, flush=True)
+        rclpy.try_shutdown()
+        return 2
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    try:
+        while rclpy.ok() and not getattr(node, "finished", False):
+            executor.spin_once(timeout_sec=0.1)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return int(getattr(node, "exit_code", 0))

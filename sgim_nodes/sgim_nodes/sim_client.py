@@ -1,0 +1,96 @@
+"""Calls to the simulator's `execute_action` that survive a simulator restart.
+
+A learning run must not lose or double a movement when the simulator node dies: if no answer
+comes within the timeout, the client waits for the service to come back and sends the same
+request again, unless the movement was in fact executed and recorded before the crash (then
+the recorded result is used, so the movement is counted once).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from rclpy.node import Node
+from rclpy.task import Future
+
+from sgim_msgs.msg import Movement
+from sgim_msgs.srv import ExecuteAction
+
+
+class SimulatorError(RuntimeError):
+    """The simulator refused the action (a bug upstream: actions are checked before)."""
+
+
+class SimClient:
+    def __init__(self, node: Node, timeout: float,
+                 recorded: Callable[[int], Movement | None] | None = None) -> None:
+        self.node = node
+        self.timeout = timeout
+        self.recorded = recorded
+        self.client = node.create_client(ExecuteAction, "execute_action")
+        self.retries = 0
+
+    async def execute(self, request: ExecuteAction.Request) -> ExecuteAction.Response:
+        while True:
+            if self.client.service_is_ready():
+                response = await self._call_with_timeout(request)
+                if response is not None:
+                    if response.status == Movement.STATUS_INVALID_ACTION:
+                        raise SimulatorError(response.message)
+                    return response
+            else:
+                await self._sleep(0.2)
+            movement = self.recorded(request.movement_index) if self.recorded else None
+            if movement is not None and request.movement_index > 0:
+                self.node.get_logger().warning(
+                    f"simulator did not answer for movement {request.movement_index}, "
+                    "but recorded it: using the record")
+                return ExecuteAction.Response(status=movement.status, outcome=movement.outcome)
+            self.retries += 1
+            self.node.get_logger().warning(
+                f"no answer from execute_action for movement {request.movement_index}; "
+                f"waiting for the simulator and retrying (retry {self.retries})")
+
+    async def _call_with_timeout(self, request) -> ExecuteAction.Response | None:
+        call = self.client.call_async(request)
+        done = await first_of(self.node, call, self.timeout)
+        if not done:
+            self.client.remove_pending_request(call)
+            return None
+        return call.result()
+
+    async def _sleep(self, seconds: float) -> None:
+        await first_of(self.node, Future(), seconds)
+
+
+async def first_of(node: Node, future: Future, timeout: float) -> bool:
+    """Await `future` for at most `timeout` seconds; True if it completed."""
+    either = Future(executor=node.executor)
+
+    def finish(value: bool) -> None:
+        if not either.done():
+            either.set_result(value)
+
+    future.add_done_callback(lambda _: finish(True))
+    timer = node.create_timer(timeout, lambda: finish(False))
+    try:
+        return await either
+    finally:
+        node.destroy_timer(timer)
+
+
+class RecentMovements:
+    """The last few movement records, for SimClient's "was it executed before the crash?".
+
+    Feed it from a `movements` subscription with `add`."""
+
+    def __init__(self, keep: int = 16) -> None:
+        self.keep = keep
+        self._recent: dict[int, Movement] = {}
+
+    def add(self, msg: Movement) -> None:
+        self._recent[msg.index] = msg
+        self._recent.pop(msg.index - self.keep, None)
+
+    def recorded(self, index: int) -> Movement | None:
+        return self._recent.get(index)

@@ -1,0 +1,297 @@
+"""social_interaction: the arbiter that drives a run, movement budget to final evaluation.
+
+It owns the movement count and runs one job at a time: a goal attempt (`choose_goal`, then the
+explorer's `reach_goal` action), an imitation (`imitate`), or a random movement, according to
+the learner:
+  sgim-d     goal babbling; each demonstration is registered in the explorer's memory,
+             imitated `imitation_count` times, and its outcome enters the interest computation
+             with the competence of the best imitation;
+  saggriac   goal babbling only;
+  demo-only  variations of the latest demonstration (random movements before the first);
+  random     random movements.
+A demonstration preempts the intrinsic loop at the next movement boundary: with the automatic
+teacher (`teacher: automatic`) the arbiter knows the teacher's period and stops every job at
+the teacher's boundaries, then waits for its word (a demonstration, or an empty one when it has
+nothing left to show), which makes a run reproducible; with a human teacher demonstrations come
+at any time and the running job is cancelled, honoured at its next movement boundary.
+
+Interfaces:
+  subscribes  demonstrations (Demonstration), evaluations (Evaluation)
+  publishes   competences (Competence, for demonstrated goals), run_status (RunStatus)
+  clients of  choose_goal, register_demonstration, execute_action; actions reach_goal, imitate
+Parameters: the common ones, every LearnerConfig field, movements, teacher,
+demonstration_period, wait_for_evaluation, wait_for_recorder, timeouts.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+
+from rclpy.action import ActionClient
+from rclpy.task import Future
+
+from sgim_msgs.action import Imitate, ReachGoal
+from sgim_msgs.msg import Competence, Demonstration, Evaluation, Movement, RunStatus
+from sgim_msgs.srv import ChooseGoal, ExecuteAction, RegisterDemonstration
+from sgim_nodes.core.competence import competence, origin_vector
+from sgim_nodes.core.random_streams import component_rng
+from sgim_nodes.ros_glue import AsyncNode, check_vector, declare_learner, floats, run_node, vec
+from sgim_nodes.sim_client import SimClient, first_of
+from sgim_ros import qos
+from sgim_ros.params import Param, non_negative, one_of, positive
+
+GOAL_BABBLERS = ("sgim-d", "saggriac")
+SOCIAL = ("sgim-d", "demo-only")
+
+
+class RunAborted(RuntimeError):
+    """The run cannot go on (a node is missing or silent); the message says which."""
+
+
+class SocialInteraction(AsyncNode):
+    def __init__(self) -> None:
+        super().__init__("social_interaction")
+        values, self.config = declare_learner(self, (
+            Param("movements", 5000, "the run's movement budget (the paper: 5000)",
+                  lambda v: v >= 1, ">= 1"),
+            Param("teacher", "automatic", "who gives demonstrations: automatic (synchronous "
+                  "at its period), human (any time), none", one_of("automatic", "human", "none"),
+                  "automatic, human or none"),
+            Param("demonstration_period", 150, "the automatic teacher's period P (paper: 150)",
+                  lambda v: v >= 1, ">= 1"),
+            Param("wait_for_evaluation", True, "finish only after the final evaluation"),
+            Param("wait_for_recorder", True, "start only once a recorder listens"),
+            Param("startup_timeout", 60.0, "seconds to wait for the other nodes", positive,
+                  "> 0"),
+            Param("teacher_timeout", 60.0, "seconds to wait for the teacher at a boundary",
+                  positive, "> 0"),
+            Param("service_timeout", 30.0, "seconds before a simulator call is retried",
+                  positive, "> 0"),
+            Param("settle_time", 1.0, "seconds of discovery settling before the start",
+                  non_negative, ">= 0"),
+        ))
+        self.p = values
+        self.learner = values["learner"]
+        self.total = values["movements"]
+        social = self.learner in SOCIAL and values["teacher"] != "none"
+        self.sync_period = values["demonstration_period"] if (
+            social and values["teacher"] == "automatic") else 0
+        self.social = social
+        self.origin = origin_vector(self.config.origin, values["outcome_size"])
+        self.rng = component_rng(values["seed"], "random")
+        self.count = 0
+        self.goals_folded = 0  # competences published so far (by the explorer and by us)
+        self.latest_demo: Demonstration | None = None
+        self.pending: deque[Demonstration] = deque()
+        self.boundary_word: dict[int, Demonstration] = {}
+        self.evaluated: set[int] = set()
+        self.finished, self.exit_code = False, 0
+        self._job = None  # the running action's goal handle, to cancel on a demonstration
+        self._waiters: list[tuple[callable, Future]] = []
+        self._started = time.monotonic()
+        self._last_log = 0
+
+        self.sim = SimClient(self, values["service_timeout"])
+        self.goal_client = self.create_client(ChooseGoal, "choose_goal")
+        self.register_client = self.create_client(RegisterDemonstration,
+                                                  "register_demonstration")
+        self.reach = ActionClient(self, ReachGoal, "reach_goal")
+        self.imitate = ActionClient(self, Imitate, "imitate")
+        self._status = self.create_publisher(RunStatus, "run_status", qos.RECORDS)
+        self._competences = self.create_publisher(Competence, "competences", qos.RECORDS)
+        self.create_subscription(Demonstration, "demonstrations", self._on_demo, qos.RECORDS)
+        self.create_subscription(Evaluation, "evaluations", self._on_evaluation, qos.RECORDS)
+        self._start_timer = self.create_timer(0.05, self._start)
+
+    # --- events -------------------------------------------------------------------------
+    def _on_demo(self, msg: Demonstration) -> None:
+        if not self.social:
+            return
+        if self.sync_period and msg.source == "automatic":
+            self.boundary_word[msg.movement_index] = msg
+        elif len(msg.action):
+            self.pending.append(msg)
+            if self._job is not None:  # preempt: honoured at the job's next movement boundary
+                self._job.cancel_goal_async()
+        self._wake()
+
+    def _on_evaluation(self, msg: Evaluation) -> None:
+        self.evaluated.add(msg.movement_index)
+        self._wake()
+
+    def _wake(self) -> None:
+        for condition, future in self._waiters:
+            if not future.done() and condition():
+                future.set_result(True)
+        self._waiters = [(c, f) for c, f in self._waiters if not f.done()]
+
+    async def _until(self, condition, timeout: float, what: str) -> None:
+        if condition():
+            return
+        future = Future(executor=self.executor)
+        self._waiters.append((condition, future))
+        if not await first_of(self, future, timeout):
+            raise RunAborted(f"timed out after {timeout:g} s waiting for {what}")
+
+    # --- the run ----------------------------------------------------------------------------
+    async def _start(self) -> None:
+        self._start_timer.cancel()
+        try:
+            await self._wait_for_graph()
+            self._publish_status(RunStatus.STATE_RUNNING, "started")
+            await self._run()
+            self._publish_status(RunStatus.STATE_RUNNING, "movement budget spent")
+            if self.p["wait_for_evaluation"]:
+                await self._until(lambda: self.total in self.evaluated, 600.0,
+                                  f"the evaluation at movement {self.total}")
+            self._publish_status(RunStatus.STATE_FINISHED, "finished")
+            self.get_logger().info(f"run finished: {self.count} movements in "
+                                   f"{time.monotonic() - self._started:.1f} s")
+        except RunAborted as error:
+            self.get_logger().error(f"run aborted: {error}")
+            self._publish_status(RunStatus.STATE_ABORTED, str(error))
+            self.exit_code = 1
+        self.finished = True
+
+    async def _wait_for_graph(self) -> None:
+        timeout = self.p["startup_timeout"]
+        servers = [(self.sim.client, "execute_action")]
+        if self.learner in GOAL_BABBLERS:
+            servers += [(self.goal_client, "choose_goal"), (self.reach, "reach_goal")]
+            if self.social:
+                servers.append((self.register_client, "register_demonstration"))
+        if self.social:
+            servers.append((self.imitate, "imitate"))
+        deadline = time.monotonic() + timeout
+        for client, name in servers:
+            ready = client.server_is_ready if hasattr(client, "server_is_ready") else (
+                client.service_is_ready)
+            while not ready():
+                if time.monotonic() > deadline:
+                    raise RunAborted(f"no '{name}' server after {timeout:g} s: is its node up?")
+                await first_of(self, Future(), 0.1)
+        while self.p["wait_for_recorder"] and self.count_subscribers("run_status") < 1:
+            if time.monotonic() > deadline:
+                raise RunAborted(f"no recorder after {timeout:g} s")
+            await first_of(self, Future(), 0.1)
+        await first_of(self, Future(), self.p["settle_time"])
+
+    async def _run(self) -> None:
+        handled: set[int] = set()
+        while self.count < self.total:
+            boundary = self.sync_period and self.count % self.sync_period == 0
+            if boundary and self.count not in handled:
+                handled.add(self.count)
+                await self._until(lambda b=self.count: b in self.boundary_word,
+                                  self.p["teacher_timeout"],
+                                  f"the teacher's word at movement {self.count}")
+                word = self.boundary_word.pop(self.count)
+                if len(word.action):
+                    await self._take_demonstration(word)
+                continue
+            if self.pending:
+                await self._take_demonstration(self.pending.popleft())
+                continue
+            cap = self.total - self.count
+            if self.sync_period:
+                cap = min(cap, self.sync_period - self.count % self.sync_period)
+            if self.learner in GOAL_BABBLERS:
+                await self._goal_attempt(cap)
+            elif self.learner == "demo-only" and self.latest_demo is not None:
+                await self._imitation(self.latest_demo, cap)
+            else:
+                await self._random_movement()
+            self._progress()
+
+    async def _take_demonstration(self, demo: Demonstration) -> None:
+        why = (check_vector(demo.action, self.p["action_size"], "demonstrated action", 1.0)
+               or check_vector(demo.outcome, self.p["outcome_size"], "demonstrated outcome"))
+        if why:
+            self.get_logger().error(f"ignored demonstration {demo.index}: {why}")
+            return
+        self.get_logger().info(f"demonstration {demo.index} at movement {self.count} "
+                               f"(outcome {floats(demo.outcome)})")
+        if self.learner == "demo-only":
+            self.latest_demo = demo
+            return
+        reply = await self.register_client.call_async(
+            RegisterDemonstration.Request(demonstration=demo))
+        if not reply.accepted:
+            self.get_logger().error(f"explorer refused demonstration {demo.index}: "
+                                    f"{reply.message}")
+            return
+        result = await self._imitation(demo, self.config.imitation_count)
+        if result is not None and result.movements_used > 0:
+            goal = vec(demo.outcome)
+            comp = -1.0
+            if len(result.best_outcome):
+                comp = competence(goal, vec(result.best_outcome), self.origin,
+                                  self.config.eps_sim)
+            self._competences.publish(Competence(
+                stamp=self.get_clock().now().to_msg(), goal_index=0,
+                movement_index=self.count, goal=floats(goal), reached=result.best_outcome,
+                competence=comp, movements_used=result.movements_used,
+                from_demonstration=True))
+            self.goals_folded += 1
+
+    async def _goal_attempt(self, cap: int) -> None:
+        reply = await self.goal_client.call_async(ChooseGoal.Request(
+            movement_index=self.count, min_goal_count=self.goals_folded))
+        if not reply.ok:
+            raise RunAborted(f"goal generator: {reply.message}")
+        result = await self._action(self.reach, ReachGoal.Goal(
+            goal=reply.goal.point, goal_index=reply.goal.index, max_movements=cap,
+            movements_before=self.count), "reach_goal")
+        if result.movements_used > 0:
+            self.goals_folded += 1
+
+    async def _imitation(self, demo: Demonstration, repetitions: int) -> Imitate.Result:
+        return await self._action(self.imitate, Imitate.Goal(
+            action=demo.action, outcome=demo.outcome, repetitions=repetitions,
+            movements_before=self.count), "imitate")
+
+    async def _action(self, client: ActionClient, goal, name: str):
+        handle = await client.send_goal_async(goal)
+        if not handle.accepted:
+            raise RunAborted(f"'{name}' refused a job: is another arbiter running?")
+        self._job = handle
+        try:
+            if self.pending and name == "reach_goal":
+                handle.cancel_goal_async()  # a demonstration came while the job was sent
+            response = await handle.get_result_async()
+        finally:
+            self._job = None
+        result = response.result
+        self.count += result.movements_used
+        return result
+
+    async def _random_movement(self) -> None:
+        index = self.count + 1
+        await self.sim.execute(ExecuteAction.Request(
+            action=floats(self.rng.uniform(-1.0, 1.0, self.p["action_size"])),
+            process=Movement.PROCESS_RANDOM, movement_index=index, record=True))
+        self.count = index
+
+    # --- progress -------------------------------------------------------------------------
+    def _progress(self) -> None:
+        if self.count - self._last_log >= max(1, self.total // 20) or self.count >= self.total:
+            self._last_log = self.count
+            rate = self.count / max(1e-9, time.monotonic() - self._started)
+            self.get_logger().info(f"{self.count}/{self.total} movements "
+                                   f"({100 * self.count / self.total:.0f} %, {rate:.1f}/s)")
+            self._publish_status(RunStatus.STATE_RUNNING, "")
+
+    def _publish_status(self, state: int, message: str) -> None:
+        self._status.publish(RunStatus(
+            stamp=self.get_clock().now().to_msg(), learner=self.learner, seed=self.p["seed"],
+            movement_index=self.count, total_movements=self.total, state=state,
+            message=message))
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(SocialInteraction, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

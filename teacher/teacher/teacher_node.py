@@ -1,0 +1,95 @@
+"""teacher: the automatic teacher, one demonstration every P movements.
+
+It follows the learner through the movement stream (reached outcomes and count) and, at the
+run's start and at every P-th movement, publishes a demonstration drawn by the core Teacher
+among the teaching-set goals the learner has not reached, or an empty one when every goal is
+reached, so that an arbiter waiting at that boundary goes on. Its random stream "teacher"
+makes its choices those of the single-process runner for the same seed.
+
+Interfaces:
+  subscribes  movements, run_status
+  publishes   demonstrations (sgim_msgs/Demonstration)
+Parameters: seed, demonstration_period, tolerance, teaching_set.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from rclpy.node import Node
+
+from sgim_msgs.msg import Demonstration, Movement, RunStatus
+from sgim_nodes.core.random_streams import component_rng
+from sgim_nodes.ros_glue import floats, run_node, vec
+from sgim_ros import qos
+from sgim_ros.params import Param, declare, non_negative
+from sim_bridge.data_files import load_teaching_set
+from teacher.teaching import PAPER_PERIOD, Teacher
+
+
+class TeacherNode(Node):
+    def __init__(self) -> None:
+        super().__init__("teacher")
+        p = declare(self, (
+            Param("seed", 0, "seed of the run (the teacher uses its stream 'teacher')",
+                  lambda v: v >= 0, ">= 0"),
+            Param("demonstration_period", PAPER_PERIOD, "movements between demonstrations",
+                  lambda v: v >= 1, ">= 1"),
+            Param("tolerance", 0.05, "distance under which a teaching goal counts as reached",
+                  non_negative, ">= 0"),
+            Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one"),
+        ))
+        ts = load_teaching_set(p["teaching_set"] or None)
+        self.teacher = Teacher(ts.actions, ts.outcomes, component_rng(p["seed"], "teacher"),
+                               p["demonstration_period"], p["tolerance"])
+        self.reached: list[np.ndarray] = []
+        self.count = 0
+        self.total: int | None = None
+        self.given = 0
+        self.answered: set[int] = set()
+        self._out = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
+        self.create_subscription(Movement, "movements", self._on_movement, qos.RECORDS)
+        self.create_subscription(RunStatus, "run_status", self._on_status, qos.RECORDS)
+        self.get_logger().info(f"{len(ts.actions)} teaching entries, period "
+                               f"{p['demonstration_period']}")
+
+    def _on_status(self, msg: RunStatus) -> None:
+        self.total = msg.total_movements
+        self._maybe_teach()
+
+    def _on_movement(self, msg: Movement) -> None:
+        if msg.process == Movement.PROCESS_EVALUATION or msg.index <= self.count:
+            return
+        if msg.status == Movement.STATUS_OK:
+            self.reached.append(vec(msg.outcome))
+        self.count = msg.index
+        self._maybe_teach()
+
+    def _maybe_teach(self) -> None:
+        k = self.count
+        if self.total is None or k >= self.total or k in self.answered:
+            return
+        if not self.teacher.due(k):
+            return
+        self.answered.add(k)
+        reached = np.array(self.reached).reshape(-1, self.teacher.outcomes.shape[1])
+        demo = self.teacher.choose(reached)
+        msg = Demonstration(stamp=self.get_clock().now().to_msg(), movement_index=k,
+                            teaching_set_index=-1, source="automatic")
+        if demo is not None:
+            self.given += 1
+            self.reached.append(demo.outcome)  # the learner stores it as its own experience
+            msg.index, msg.teaching_set_index = self.given, demo.index
+            msg.action, msg.outcome = floats(demo.action), floats(demo.outcome)
+            self.get_logger().info(f"demonstration {self.given} at movement {k}: entry "
+                                   f"{demo.index}, outcome {np.round(demo.outcome, 3)}")
+        else:
+            self.get_logger().info(f"nothing left to demonstrate at movement {k}")
+        self._out.publish(msg)
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(TeacherNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
