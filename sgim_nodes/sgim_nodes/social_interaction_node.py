@@ -171,9 +171,26 @@ class SocialInteraction(AsyncNode):
                 if time.monotonic() > deadline:
                     raise RunAborted(f"no '{name}' server after {timeout:g} s: is its node up?")
                 await first_of(self, Future(), 0.1)
-        while self.p["wait_for_recorder"] and self.count_subscribers("run_status") < 1:
+        # The evaluator and the automatic teacher must hear the start too.
+        publishers = ["evaluations"] if self.p["wait_for_evaluation"] else []
+        if self.sync_period:
+            publishers.append("demonstrations")
+        for topic in publishers:
+            while self.count_publishers(topic) < 1:
+                if time.monotonic() > deadline:
+                    raise RunAborted(f"nobody publishes '{topic}' after {timeout:g} s: is its "
+                                     "node (evaluator or teacher) up?")
+                await first_of(self, Future(), 0.1)
+        # The recorder must hear the run from its first record: wait for the node itself
+        # (others, like a launcher's progress display, also listen to run_status), then for
+        # our own records to reach it; the settle time lets the other nodes' records match it.
+        while self.p["wait_for_recorder"] and not (
+                "recorder" in self.get_node_names()
+                and self._status.get_subscription_count() >= 1
+                and self._competences.get_subscription_count() >= 1):
             if time.monotonic() > deadline:
-                raise RunAborted(f"no recorder after {timeout:g} s")
+                raise RunAborted(f"no recorder after {timeout:g} s: start the recorder node, "
+                                 "or set wait_for_recorder to false")
             await first_of(self, Future(), 0.1)
         await first_of(self, Future(), self.p["settle_time"])
 

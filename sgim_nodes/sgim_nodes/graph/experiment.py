@@ -38,6 +38,8 @@ REPO = Path(__file__).resolve().parents[3]
 ROS2RUN = REPO / "ros_ws" / "ros2run.sh"
 LEARNER_CONFIG = REPO / "sgim_nodes" / "config" / "learner.yaml"
 SOCIAL = ("sgim-d", "demo-only")
+# The arbiter only knows synchronous (automatic) and asynchronous (human) demonstrations.
+TEACHER_MODES = {"automatic": "automatic", "human": "human", "external": "human"}
 
 
 def nodes_for(learner: str, teacher: str) -> list[tuple[str, str]]:
@@ -65,7 +67,7 @@ def parameters(args: argparse.Namespace, run_dir: Path) -> dict[str, Any]:
         values[name] = yaml.safe_load(text)
     values.update(learner=args.learner, seed=args.seed, movements=args.movements,
                   eval_every=args.eval_every, demonstration_period=args.period,
-                  teacher=args.teacher if args.learner in SOCIAL else "none",
+                  teacher=TEACHER_MODES[args.teacher] if args.learner in SOCIAL else "none",
                   output=str(run_dir / "bag"), storage=args.storage)
     return values
 
@@ -102,8 +104,11 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                    help="movements between evaluations; paper 250 (default: %(default)s)")
     p.add_argument("--period", type=int, default=150,
                    help="movements between demonstrations; paper 150 (default: %(default)s)")
-    p.add_argument("--teacher", choices=("automatic", "human"), default="automatic",
-                   help="automatic teacher node, or you at the human_input prompt")
+    p.add_argument("--teacher", choices=("automatic", "human", "external"),
+                   default="automatic",
+                   help="automatic: the teacher node, every --period movements; human: you, at "
+                        "the human_input prompt in this terminal; external: no teacher node, "
+                        "demonstrations come from any other publisher at any time")
     p.add_argument("--runs-dir", type=Path, default=REPO / "runs",
                    help="where the run folder is made (default: runs/)")
     p.add_argument("--name", help="run folder name (default: <learner>-seed<N>-<time>)")
@@ -111,6 +116,9 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                    help="bag storage (default: mcap)")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                    help="override any node parameter, e.g. --param goal_budget=20")
+    p.add_argument("--domain", type=int, default=None,
+                   help="use this ROS_DOMAIN_ID as it is, e.g. to join a graph from a test "
+                        "(default: reserve a free one)")
     p.add_argument("--timeout", type=float, default=0,
                    help="abort the run after this many seconds (default: none)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -178,18 +186,19 @@ def run(args: argparse.Namespace) -> int:
     params = parameters(args, run_dir)
     params_file = run_dir / "params.yaml"
     params_file.write_text(yaml.safe_dump({"/**": {"ros__parameters": params}}))
-    reservation = reserve_domain()
-    env = isolated_ros_environment(reservation.domain_id)
+    reservation = reserve_domain() if args.domain is None else None
+    domain = args.domain if reservation is None else reservation.domain_id
+    env = isolated_ros_environment(domain)
     os.environ.update(env)  # the launcher's own progress node joins the run's domain
     meta: dict[str, Any] = {
         "learner": args.learner, "seed": args.seed, "movements": args.movements,
-        "teacher": params["teacher"], "ros_domain_id": reservation.domain_id,
+        "teacher": params["teacher"], "ros_domain_id": domain,
         "started": datetime.now(UTC).isoformat(), "parameters": params, "versions": versions(),
     }
     (run_dir / "metadata.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
     nodes = nodes_for(args.learner, params["teacher"])
     print(f"run_experiment: {args.learner}, seed {args.seed}, {args.movements} movements, "
-          f"domain {reservation.domain_id}, {len(nodes)} nodes -> {run_dir}", file=sys.stderr)
+          f"domain {domain}, {len(nodes)} nodes -> {run_dir}", file=sys.stderr)
     group = ProcessGroup(env=env, log_dir=run_dir / "logs")
     progress = human = None
     outcome, code = "unknown", 1
@@ -201,7 +210,7 @@ def run(args: argparse.Namespace) -> int:
         for package, executable in nodes:
             group.start(executable, [str(ROS2RUN), package, executable, "--ros-args",
                                      "--params-file", str(params_file)])
-        if params["teacher"] == "human" and args.learner in SOCIAL:
+        if args.teacher == "human" and args.learner in SOCIAL:
             human = subprocess.Popen([str(ROS2RUN), "teacher", "human_input", "--ros-args",
                                       "--params-file", str(params_file)], env=env)
         arbiter, recorder = group.children[-1], group.children[0]
@@ -237,7 +246,8 @@ def run(args: argparse.Namespace) -> int:
         group.stop_all()
         if human is not None and human.poll() is None:
             human.terminate()
-        reservation.release()
+        if reservation is not None:
+            reservation.release()
         meta.update(ended=datetime.now(UTC).isoformat(), outcome=outcome,
                     duration_s=round(time.monotonic() - started, 2))
         (run_dir / "metadata.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))

@@ -1,0 +1,181 @@
+"""End to end: every learner through the node graph, checked from its bag and against the
+single-process runner."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from sgim_nodes.core.config import LearnerConfig
+from tests.conftest import REPO
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+RUN = str(REPO / "ros_ws" / "run_experiment.sh")
+MOVEMENTS, EVAL_EVERY, PERIOD, SEED = 300, 100, 50, 2
+IMITATIONS = LearnerConfig().imitation_count
+
+
+def run_graph(ros_processes, ros_domain, tmp_path, learner, *extra, timeout=300):
+    child = ros_processes.start(
+        f"run-{learner}",
+        [RUN, learner, "--seed", str(SEED), "--movements", str(MOVEMENTS), "--eval-every",
+         str(EVAL_EVERY), "--period", str(PERIOD), "--runs-dir", str(tmp_path), "--name",
+         learner, "--domain", str(ros_domain), "--quiet", "--timeout", str(timeout), *extra],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    return child
+
+
+def finish(child, tmp_path, learner, timeout=330):
+    output, _ = child.communicate(timeout=timeout)
+    assert child.returncode == 0, output[-3000:]
+    from sgim_nodes.bag_reader import load_run
+
+    return load_run(tmp_path / learner / "bag")
+
+
+def run_single_process(learner):
+    from sgim_nodes.core.learners import make_learner
+    from sgim_nodes.core.runner import build_world, run
+
+    world = build_world("fishing", SEED)
+    learner_ = make_learner(learner, world.env.action_dim, world.env.outcome_dim, SEED)
+    records: list[dict] = []
+    run(learner_, world, MOVEMENTS, EVAL_EVERY, SEED, records.append, teacher_period=PERIOD)
+    return records
+
+
+@pytest.mark.parametrize("learner", ["sgim-d", "saggriac", "demo-only", "random"])
+def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner):
+    from sgim_msgs.msg import Movement, RunStatus
+
+    run = finish(run_graph(ros_processes, ros_domain, tmp_path, learner), tmp_path, learner)
+
+    # Every movement recorded once, in order.
+    assert [m.index for m in run.movements] == list(range(1, MOVEMENTS + 1))
+    processes = [m.process for m in run.movements]
+    # Evaluations at the right counts, and the run's end recorded.
+    assert [e.movement_index for e in run.evaluations] == [0, 100, 200, 300]
+    assert all(len(e.distances) == len(run.evaluations[0].distances) > 50
+               for e in run.evaluations)
+    assert run.run_status[-1].state == RunStatus.STATE_FINISHED
+
+    if learner in ("sgim-d", "saggriac"):
+        maps = run.region_map
+        counts = [m.goal_count for m in maps]
+        assert counts == sorted(counts) and counts[-1] == len(run.competences) > 10
+        assert len(run.goals) >= len(run.competences) - len(run.demonstrations)
+    if learner in ("sgim-d", "demo-only"):
+        demos = [d for d in run.demonstrations if len(d.action)]
+        assert [d.movement_index for d in run.demonstrations] == list(range(0, MOVEMENTS,
+                                                                           PERIOD))
+        assert demos and all(d.source == "automatic" for d in demos)
+        for demo in demos:  # each demonstration is followed by its imitation at once
+            k = demo.movement_index
+            follow = run.movements[k: k + (IMITATIONS if learner == "sgim-d" else PERIOD)]
+            assert all(m.process == Movement.PROCESS_IMITATION for m in follow), k
+            assert all(np.allclose(m.goal, demo.outcome) for m in follow)
+            assert all(np.linalg.norm(m.action - demo.action) < LearnerConfig().imitation_epsilon
+                       for m in follow)
+    if learner == "saggriac":
+        assert Movement.PROCESS_IMITATION not in processes
+        assert set(processes) <= {Movement.PROCESS_GOAL_DIRECTED, Movement.PROCESS_EXPLORATION}
+    if learner == "random":
+        assert set(processes) == {Movement.PROCESS_RANDOM}
+
+    # The graph is the single-process learner, movement for movement.
+    records = run_single_process(learner)
+    moves = [r for r in records if r["type"] == "movement"]
+    assert len(moves) == MOVEMENTS
+    for graph_move, move in zip(run.movements, moves, strict=True):
+        assert np.array_equal(graph_move.action, np.asarray(move["action"])), graph_move.index
+    evaluations = [r["mean_distance"] for r in records if r["type"] == "evaluation"]
+    assert [e.mean_distance for e in run.evaluations] == pytest.approx(evaluations, abs=1e-12)
+
+
+def test_a_demonstration_mid_goal_is_handled_at_the_next_movement_boundary(
+        ros_processes, ros_domain, tmp_path, rclpy_context):
+    from sgim_msgs.msg import Demonstration, Movement
+    from sgim_ros import qos
+    from sim_bridge.data_files import load_teaching_set
+    from tests.ros.graph_client import GraphClient
+
+    client = GraphClient(rclpy_context, "demo_injector")
+    seen: list[Movement] = client.capture(Movement, "/movements", qos.RECORDS)
+    publisher = client.node.create_publisher(Demonstration, "/demonstrations", qos.RECORDS)
+    child = run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--teacher", "external")
+    teaching = load_teaching_set()
+    # Wait until a goal attempt is under way (a goal-directed movement past the first ones).
+    assert client.spin_until(
+        lambda: len(seen) > 40 and seen[-1].process == Movement.PROCESS_GOAL_DIRECTED,
+        timeout=120)
+    sent_after = seen[-1].index
+    publisher.publish(Demonstration(
+        index=1, movement_index=sent_after, action=teaching.actions[0].tolist(),
+        outcome=teaching.outcomes[0].tolist(), teaching_set_index=0, source="human"))
+    client.close()
+    run = finish(child, tmp_path, "sgim-d")
+
+    imitation = [m.index for m in run.movements if m.process == Movement.PROCESS_IMITATION]
+    assert len(imitation) == IMITATIONS
+    first = imitation[0]
+    # At most the movement under way and one more (message latency) before the preemption.
+    assert sent_after < first <= sent_after + 2
+    assert imitation == list(range(first, first + IMITATIONS))
+    # The interrupted goal still counted for the interest, and the demonstrated goal too.
+    assert any(c.from_demonstration for c in run.competences)
+    interrupted = [c for c in run.competences if c.movement_index == first - 1]
+    assert interrupted and interrupted[0].movements_used >= 1
+
+
+def test_the_human_teacher_script_drives_a_run_through_the_prompt(
+        ros_processes, ros_domain, tmp_path):
+    import re
+    import threading
+    import time
+
+    from sgim_msgs.msg import Movement
+
+    child = ros_processes.start(
+        "human-run",
+        [RUN, "sgim-d", "--seed", "1", "--movements", "600", "--eval-every", "0",
+         "--runs-dir", str(tmp_path), "--name", "human", "--domain", str(ros_domain),
+         "--teacher", "human", "--quiet", "--timeout", "240"],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    lines: list[str] = []
+    reader = threading.Thread(target=lambda: lines.extend(child.stdout), daemon=True)
+    reader.start()
+    child.stdin.write("teach 999\n")  # bad input: a message and a new prompt
+    child.stdin.flush()
+    deadline = time.monotonic() + 120
+    # A person teaches a running learner: wait until the prompt shows movements.
+    while not any(re.search(r"movements [1-9]", line) for line in lines):
+        assert time.monotonic() < deadline, "".join(lines)[-3000:]
+        child.stdin.write("status\n")
+        child.stdin.flush()
+        time.sleep(0.5)
+    while not any("sent demonstration" in line for line in lines):
+        assert time.monotonic() < deadline, "".join(lines)[-3000:]
+        child.stdin.write("teach 0\n")  # refused until the learner listens
+        child.stdin.flush()
+        time.sleep(1.0)
+    child.stdin.write("quit\n")
+    child.stdin.close()
+    assert child.wait(timeout=300) == 0, "".join(lines)[-3000:]
+    reader.join(timeout=10)
+    output = "".join(lines)
+    assert "999" in output and "error" in output.lower()
+    from sgim_nodes.bag_reader import load_run
+
+    run = load_run(tmp_path / "human" / "bag")
+    assert [d.source for d in run.demonstrations] == ["human"]
+    processes = [m.process for m in run.movements]
+    assert processes.count(Movement.PROCESS_IMITATION) == IMITATIONS
+    assert [m.index for m in run.movements] == list(range(1, 601))
+
+
+if __name__ == "__main__":
+    sys.exit(pytest.main([__file__, "-x", "-q"]))
