@@ -29,6 +29,7 @@ import time
 from collections import deque
 
 from rclpy.action import ActionClient
+from rclpy.duration import Duration
 from rclpy.task import Future
 
 from sgim_msgs.action import Imitate, ReachGoal
@@ -152,6 +153,8 @@ class SocialInteraction(AsyncNode):
             self.get_logger().error(f"run aborted: {error}")
             self._publish_status(RunStatus.STATE_ABORTED, str(error))
             self.exit_code = 1
+        # The last status must reach the recorder and the launcher before this process ends.
+        self._status.wait_for_all_acked(Duration(seconds=5.0))
         self.finished = True
 
     async def _wait_for_graph(self) -> None:

@@ -229,9 +229,11 @@ def run(args: argparse.Namespace) -> int:
             if args.timeout and time.monotonic() - started > args.timeout:
                 raise RuntimeError(f"timed out after {args.timeout:g} s")
         arbiter.wait(timeout=60)
-        outcome = "finished" if progress.state == progress.ok_state else (
-            f"aborted: {progress.message}")
-        code = 0 if progress.state == progress.ok_state else 1
+        progress.spin(0.5)  # the last status may still be on its way
+        # The arbiter's exit code is the truth (0: finished); its status says why not.
+        code = 0 if arbiter.returncode == 0 else 1
+        outcome = "finished" if code == 0 else (
+            f"aborted: {progress.message or f'arbiter exit code {arbiter.returncode}'}")
         # the recorder ends by itself once it has written the end of the run
         with contextlib.suppress(subprocess.TimeoutExpired):
             recorder.wait(timeout=30)
