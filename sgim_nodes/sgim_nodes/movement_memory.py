@@ -44,6 +44,7 @@ class MovementMemory:
             return
         for listener in self.before_store:
             listener(msg)
+        self._store_deferred(before=msg.index)
         if msg.status == Movement.STATUS_OK:
             why = (check_vector(msg.action, self.action_size, "action", 1.0)
                    or check_vector(msg.outcome, self.outcome_size, "outcome"))
@@ -56,7 +57,6 @@ class MovementMemory:
         self._recent.add(msg)
         for listener in self.after_store:
             listener(msg)
-        self._store_deferred()
         for needed, future in self._waiters:
             if needed <= self.count and not future.done():
                 future.set_result(True)
@@ -72,15 +72,18 @@ class MovementMemory:
 
     def add_demonstration_after(self, movement_index: int, action: np.ndarray,
                                 outcome: np.ndarray) -> None:
-        """Store a demonstration given at `movement_index` once that movement is in memory
-        (and its listeners ran), as the learner itself received it between two movements."""
+        """Store a demonstration given at `movement_index` just before the next movement is
+        stored: the learner received it between those two movements, so anything done at
+        movement_index itself (an evaluation) must not see it yet. If that next movement is
+        already in, it is stored at once."""
         self._deferred.append((movement_index, action, outcome))
-        self._store_deferred()
+        if movement_index < self.count:
+            self._store_deferred(before=self.count + 1)
 
-    def _store_deferred(self) -> None:
+    def _store_deferred(self, before: int) -> None:
         keep = []
         for index, action, outcome in self._deferred:
-            if index <= self.count:
+            if index < before:
                 why = self.add_demonstration(action, outcome)
                 if why:
                     self.node.get_logger().error(f"demonstration not stored: {why}")

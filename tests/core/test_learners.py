@@ -83,6 +83,25 @@ def test_a_demonstration_preempts_the_goal_attempt_at_the_next_movement():
     assert any(np.array_equal(g, np.clip(interrupted.goal, -1, 1)) for g in leaf_goals)
 
 
+def test_the_teachers_turn_ends_the_goal_attempt_even_without_a_demonstration():
+    arm = PlanarArm(seed=5)
+    for name, interrupted in (("sgim-d", True), ("saggriac", False)):
+        learner = make_learner(name, 12, 2, 5, LearnerConfig(goal_budget=10))
+        for _ in range(40):
+            a = learner.rngs.random.uniform(-1, 1, 12)
+            learner.memory.add(a, arm.forward(a), "random")
+        while True:
+            a, label = learner.next_action()
+            learner.observe(a, arm.execute(a))
+            if label == "goal_directed" and not learner.process.done:
+                break
+        goals, attempt = learner.n_goals, learner.process
+        learner.on_teacher_turn()
+        assert (learner.n_goals == goals + 1) is interrupted, name
+        learner.next_action()
+        assert (learner.process is not attempt) is interrupted, name
+
+
 def test_non_social_learners_ignore_demonstrations():
     for name in ("saggriac", "random"):
         learner = make_learner(name, 12, 2, 0)

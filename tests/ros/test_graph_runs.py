@@ -37,6 +37,11 @@ def finish(child, tmp_path, learner, timeout=330):
     return load_run(tmp_path / learner / "bag")
 
 
+# sgim-d runs with a lenient teacher, which runs out of demonstrations mid-run: its turns
+# without a demonstration must still match the runner.
+TOLERANCE = {"sgim-d": 0.35, "demo-only": 0.05}
+
+
 def run_single_process(learner):
     from sgim_nodes.core.learners import make_learner
     from sgim_nodes.core.runner import build_world, run
@@ -44,7 +49,8 @@ def run_single_process(learner):
     world = build_world("fishing", SEED)
     learner_ = make_learner(learner, world.env.action_dim, world.env.outcome_dim, SEED)
     records: list[dict] = []
-    run(learner_, world, MOVEMENTS, EVAL_EVERY, SEED, records.append, teacher_period=PERIOD)
+    run(learner_, world, MOVEMENTS, EVAL_EVERY, SEED, records.append, teacher_period=PERIOD,
+        teacher_tolerance=TOLERANCE.get(learner, 0.05))
     return records
 
 
@@ -52,7 +58,9 @@ def run_single_process(learner):
 def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner):
     from sgim_msgs.msg import Movement, RunStatus
 
-    run = finish(run_graph(ros_processes, ros_domain, tmp_path, learner), tmp_path, learner)
+    extra = ["--param", f"tolerance={TOLERANCE[learner]}"] if learner in TOLERANCE else []
+    run = finish(run_graph(ros_processes, ros_domain, tmp_path, learner, *extra), tmp_path,
+                 learner)
 
     # Every movement recorded once, in order.
     assert [m.index for m in run.movements] == list(range(1, MOVEMENTS + 1))
@@ -72,6 +80,8 @@ def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner)
         demos = [d for d in run.demonstrations if len(d.action)]
         assert [d.movement_index for d in run.demonstrations] == list(range(0, MOVEMENTS,
                                                                            PERIOD))
+        if learner == "sgim-d":  # the lenient teacher ran out: its later turns are empty
+            assert 0 < len(demos) < len(run.demonstrations)
         assert demos and all(d.source == "automatic" for d in demos)
         for demo in demos:  # each demonstration is followed by its imitation at once
             k = demo.movement_index

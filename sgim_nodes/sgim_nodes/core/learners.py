@@ -89,6 +89,9 @@ class Learner:
     def on_demonstration(self, action: np.ndarray, outcome: np.ndarray) -> None:
         """Ignored by non-social learners."""
 
+    def on_teacher_turn(self) -> None:
+        """The teacher's turn came (every P movements), with or without a demonstration."""
+
     def inverse(self, goal: np.ndarray) -> np.ndarray:
         return inverse_or_centre(self.inverse_model, goal, self.action_dim)
 
@@ -177,6 +180,14 @@ class GoalBabblingLearner(Learner):
         action, label = self.process.next_action()
         self._last_label = label
         return action, label
+
+    def on_teacher_turn(self) -> None:
+        """The teacher interrupts the intrinsic loop at every one of its turns, even when it
+        has nothing left to show (the learner then simply chooses a new goal): the graph's
+        arbiter must stop the running job at the teacher's boundary before it knows what the
+        teacher will say, and the single-process learner behaves the same."""
+        if self.social and isinstance(self.process, GoalAttempt) and not self.process.done:
+            self._interrupt()
 
     def _interrupt(self) -> None:
         """A demonstration preempts the goal attempt at this movement boundary (as the graph's

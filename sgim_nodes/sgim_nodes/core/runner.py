@@ -101,6 +101,7 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
         if eval_every > 0 and i % eval_every == 0:
             evaluate(i)
         if teacher is not None and teacher.due(i):
+            learner.on_teacher_turn()
             demo = teacher.choose(learner.reached_outcomes())
             if demo is not None:
                 learner.on_demonstration(demo.action, demo.outcome)

@@ -1,0 +1,11 @@
+"""Analysis of a study (learners x seeds) from its bags alone: statistics, figures, tables.
+
+Why bags only: a study's bags are its complete, self-describing record (they embed their message
+definitions), so the comparison can be redone anywhere, without ROS and without the learner's
+code, and it shows exactly what the node graph did.
+
+  study.py       discover the runs, load each bag once into numpy arrays (cached per run)
+  statistics.py  means and 95 % intervals over seeds, pairwise tests, isolated-region coverage
+  figures.py     error curves, landing histograms, interest-coloured region trees (PNG)
+  cli.py         `analyze STUDY_DIR`: everything above into PNGs, results.md and results.json
+"""

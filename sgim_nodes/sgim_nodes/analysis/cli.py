@@ -1,0 +1,271 @@
+"""`analyze STUDY_DIR`: a study's figures, results.md and results.json, from its bags alone.
+
+Why one command: reproducing the paper's comparison must be a single step after the study,
+and its numbers must exist both for people (markdown tables beside the figures) and for
+scripts (the same numbers as JSON).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from dataclasses import asdict
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+
+from sgim_nodes.analysis import figures
+from sgim_nodes.analysis.statistics import (
+    ALPHA,
+    CONFIDENCE,
+    Coverage,
+    Curve,
+    FinalErrors,
+    PairTest,
+    RunSummary,
+    error_curves,
+    final_errors,
+    isolated_coverage,
+    pairwise_tests,
+    run_summaries,
+)
+from sgim_nodes.analysis.study import CACHE_NAME, Study, discover_runs, load_study
+from sim_bridge.lake import ISOLATED_REGION
+
+FRAME_FRACTIONS = (0.2, 0.5, 1.0)  # the paper's 1000, 2500 and 5000 of 5000 movements
+
+DESCRIPTION = f"""\
+Analyse a study (one folder per run: <learner>-seed<N>/ with bag/ and metadata.yaml) from its
+bags alone, and write:
+  error_curves.png  mean error on the benchmark goals per learner, 95 % band over seeds
+  landings.png      where the hook landed: rows learners, columns movements 1..T
+  region_tree.png   interest-coloured leaf regions of sgim-d and saggriac at the same times
+  results.md        final errors (mean and 95 % interval), pairwise tests (Welch's t and
+                    Mann-Whitney U), isolated-region coverage, runs and durations
+  results.json      the same numbers
+Each bag is read once; its columns are cached as <run>/{CACHE_NAME}
+(rebuilt when the bag changes).
+Damaged bags are reported and used as far as readable; unreadable runs are skipped."""
+
+
+def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(
+        prog="analyze", description=DESCRIPTION,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="example: analyze runs/study --times 1000 2500 5000")
+    parser.add_argument("study_dir", type=Path, metavar="STUDY_DIR",
+                        help="the study folder (run_study.sh --runs-dir), or one run folder")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="where to write the figures and tables (default STUDY_DIR/analysis)")
+    parser.add_argument("--times", type=int, nargs="+", default=None, metavar="N",
+                        help="movement counts for the landing frames and the region-tree "
+                             "snapshots (default 20%%, 50%% and 100%% of the run length)")
+    parser.add_argument("--tree-seed", type=int, default=None, metavar="SEED",
+                        help="seed whose region trees are drawn (default: the lowest)")
+    parser.add_argument("--no-cache", action="store_true",
+                        help="re-read every bag, ignoring and rewriting the caches")
+    args = parser.parse_args(argv)
+    if args.times is not None and any(t < 1 for t in args.times):
+        parser.error("--times must be positive movement counts")
+    return args
+
+
+def default_times(study: Study) -> list[int]:
+    length = max((r.total_movements for r in study.runs), default=0)
+    return sorted({max(1, round(f * length)) for f in FRAME_FRACTIONS})
+
+
+def _clean(value: object) -> object:
+    """JSON-safe: numpy to Python, NaN and inf to None."""
+    if isinstance(value, dict):
+        return {str(k): _clean(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_clean(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _clean(value.tolist())
+    if isinstance(value, np.generic):
+        return _clean(value.item())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, Path):
+        return str(value)
+    return value
+
+
+def _curve_json(c: Curve) -> dict:
+    return {"movements": c.movements, "mean": c.mean, "low": c.low, "high": c.high, "n": c.n}
+
+
+def _final_json(f: FinalErrors) -> dict:
+    return asdict(f) | {"mean": f.interval.mean, "low": f.interval.low, "high": f.interval.high,
+                        "n": f.interval.n}
+
+
+def _coverage_json(c: Coverage) -> dict:
+    share = c.share
+    return {"runs": len(c.runs), "runs_reached": c.runs_reached, "share_mean": share.mean,
+            "share_low": share.low, "share_high": share.high,
+            "first_movement_median": c.first_movement_median,
+            "per_run": [asdict(r) | {"share": r.share} for r in c.runs]}
+
+
+def _test_json(t: PairTest) -> dict:
+    return asdict(t) | {"applicable": t.applicable, "significant": t.significant}
+
+
+def results_dict(study: Study, curves: dict[str, Curve], finals: dict[str, FinalErrors],
+                 tests: list[PairTest], coverage: dict[str, Coverage],
+                 summaries: dict[str, RunSummary], written: dict[str, str]) -> dict:
+    return _clean({
+        "study": study.path.resolve(), "generated": datetime.now(UTC).isoformat(),
+        "confidence": CONFIDENCE, "alpha": ALPHA, "isolated_region": ISOLATED_REGION,
+        "runs": {k: asdict(v) for k, v in summaries.items()}, "skipped": study.skipped,
+        "warnings": study.warnings,
+        "curves": {k: _curve_json(v) for k, v in curves.items()},
+        "final_errors": {k: _final_json(v) for k, v in finals.items()},
+        "tests": [_test_json(t) for t in tests],
+        "isolated_coverage": {k: _coverage_json(v) for k, v in coverage.items()},
+        "figures": written,
+    })
+
+
+def _num(value: float | None, digits: int = 3) -> str:
+    return "n/a" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
+
+
+def _p(value: float | None) -> str:
+    return "n/a" if value is None else f"{value:.2g}" if value >= 1e-3 else f"{value:.1e}"
+
+
+def _table(header: list[str], rows: list[list[str]]) -> list[str]:
+    return ["| " + " | ".join(header) + " |", "|" + "---|" * len(header),
+            *("| " + " | ".join(r) + " |" for r in rows), ""]
+
+
+def results_markdown(study: Study, finals: dict[str, FinalErrors], tests: list[PairTest],
+                     coverage: dict[str, Coverage], summaries: dict[str, RunSummary],
+                     written: dict[str, str]) -> str:
+    pct = round(CONFIDENCE * 100)
+    out = [f"# Study results: {study.path.resolve()}", "",
+           "Generated by `analyze` from the bags alone. Intervals are two-sided "
+           f"t intervals at {pct} % over seeds (n/a with one run).", ""]
+    out += ["## Runs", "", *_table(
+        ["learner", "runs", "finished", "seeds", "movements", "total duration (s)",
+         "mean duration (s)"],
+        [[s.learner, str(s.runs), str(s.finished), ", ".join(map(str, s.seeds)),
+          ", ".join(sorted(set(map(str, s.movements)), key=int)),
+          _num(s.total_duration_s, 1), _num(s.mean_duration_s, 1)]
+         for s in summaries.values()])]
+    if study.skipped:
+        out += ["Skipped runs:", ""] + [f"- {k}: {v}" for k, v in study.skipped.items()] + [""]
+    out += ["## Final error", "",
+            "Mean distance to the benchmark goals at each run's last evaluation "
+            "(outcome units; lower is better).", ""]
+    out += _table(
+        ["learner", "n", "at movement", "mean", f"{pct} % interval", "per seed"],
+        [[f.learner, str(f.interval.n), ", ".join(sorted(set(map(str, f.movements)), key=int)),
+          _num(f.interval.mean), f"[{_num(f.interval.low)}, {_num(f.interval.high)}]",
+          ", ".join(f"{v:.3f}" for v in f.values)] for f in finals.values()])
+    out += ["## Pairwise tests of final errors", "",
+            f"Two-sided Welch's t-test and Mann-Whitney U; 'significant' when both p < {ALPHA}. "
+            "n/a when a learner has fewer than 2 runs.", ""]
+    out += _table(
+        ["a", "b", "mean(a) - mean(b)", "closer", "Welch t", "Welch p", "MW U", "MW p",
+         "significant"],
+        [[t.a, t.b, _num(t.mean_difference), t.closer or "tie", _num(t.welch_t, 2),
+          _p(t.welch_p), _num(t.mann_whitney_u, 1), _p(t.mann_whitney_p),
+          ("yes" if t.significant else "no") if t.applicable else "n/a"] for t in tests])
+    centre = ", ".join(f"{v:.3g}" for v in ISOLATED_REGION["centre"])
+    out += ["## Isolated region coverage", "",
+            f"Isolated region: centre ({centre}), radius {ISOLATED_REGION['radius']:.3g} "
+            "(normalised outcome units). Share: the run's valid landings that fall in it; "
+            "'own' excludes imitations and demonstrated actions.", ""]
+    out += _table(
+        ["learner", "runs reaching it", "share (mean)", f"share {pct} % interval",
+         "landings in it per run", "own per run", "first movement per run", "median first"],
+        [[c.learner, f"{c.runs_reached}/{len(c.runs)}", _num(c.share.mean, 4),
+          f"[{_num(c.share.low, 4)}, {_num(c.share.high, 4)}]",
+          ", ".join(str(r.in_region) for r in c.runs),
+          ", ".join(str(r.own_in_region) for r in c.runs),
+          ", ".join("never" if r.first_movement is None else str(r.first_movement)
+                    for r in c.runs), _num(c.first_movement_median, 0)]
+         for c in coverage.values()])
+    out += ["## Figures", ""] + [f"- [{name}]({name})" for name in written.values()] + [""]
+    if study.warnings:
+        out += ["## Warnings", ""] + [f"- {w}" for w in study.warnings] + [""]
+    return "\n".join(out)
+
+
+def _progress_bar(total: int):
+    try:
+        from tqdm import tqdm
+    except ImportError:  # progress is a comfort, not a requirement
+        return None
+    return tqdm(total=total, desc="[analyze] runs", unit="run", file=sys.stderr)
+
+
+def run(args: argparse.Namespace) -> int:
+    study_dir: Path = args.study_dir
+    if not study_dir.is_dir():
+        print(f"analyze: {study_dir} is not a folder", file=sys.stderr)
+        return 2
+    found = discover_runs(study_dir)
+    if not found:
+        print(f"analyze: no run folders (<learner>-seed<N>/bag) in {study_dir}", file=sys.stderr)
+        return 2
+    print(f"[analyze] {len(found)} run folders in {study_dir}", file=sys.stderr)
+    bar = _progress_bar(len(found))
+
+    def warn(message: str) -> None:
+        (bar.write if bar else print)(f"[analyze] warning: {message}", file=sys.stderr)
+
+    def step(name: str) -> None:
+        if bar:
+            bar.set_postfix_str(name)
+            bar.update()
+        else:
+            print(f"[analyze] loaded {name}", file=sys.stderr)
+
+    study = load_study(study_dir, use_cache=not args.no_cache, warn=warn, progress=step)
+    if bar:
+        bar.close()
+    if not study.runs:
+        print(f"analyze: no usable run in {study_dir}", file=sys.stderr)
+        return 1
+    out: Path = args.out or study_dir / "analysis"
+    out.mkdir(parents=True, exist_ok=True)
+    times = sorted(set(args.times)) if args.times else default_times(study)
+    print(f"[analyze] statistics over {len(study.runs)} runs of "
+          f"{', '.join(study.learners)}; frames at movements {times}", file=sys.stderr)
+    curves, finals = error_curves(study), final_errors(study)
+    tests, coverage, summaries = pairwise_tests(finals), isolated_coverage(study), \
+        run_summaries(study)
+    written: dict[str, str] = {}
+    print("[analyze] drawing figures", file=sys.stderr)
+    if curves:
+        written["error_curves"] = figures.plot_error_curves(curves, out / "error_curves.png").name
+    written["landings"] = figures.plot_landings(study, times, out / "landings.png").name
+    tree = figures.plot_region_trees(study, times, out / "region_tree.png", args.tree_seed)
+    if tree is not None:
+        written["region_tree"] = tree.name
+    (out / "results.md").write_text(
+        results_markdown(study, finals, tests, coverage, summaries, written), encoding="utf-8")
+    (out / "results.json").write_text(json.dumps(
+        results_dict(study, curves, finals, tests, coverage, summaries, written), indent=1),
+        encoding="utf-8")
+    print(f"Wrote {', '.join([*written.values(), 'results.md', 'results.json'])} to {out}")
+    if study.skipped:
+        print(f"Skipped {len(study.skipped)} run(s): {', '.join(study.skipped)} "
+              "(see results.md, Warnings)")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    return run(parse_args(argv))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

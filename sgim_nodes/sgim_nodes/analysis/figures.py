@@ -1,0 +1,175 @@
+"""The study's figures as PNG files (matplotlib Agg: no display needed).
+
+  error_curves.png  mean distance to the benchmark goals vs movements, one line per learner,
+                    its 95 % band over seeds (the paper's main figure)
+  landings.png      where the hook landed, rows learners, columns cumulated time frames, pooled
+                    over seeds; the isolated region outlined (the paper's exploration figure)
+  region_tree.png   the leaves of the interest tree at chosen times, coloured by interest, for
+                    one seed of each learner that builds a tree (sgim-d, saggriac)
+
+Why pooled histograms with a shared log scale: a learner's landings pile up in the main basin by
+orders of magnitude; a linear scale would hide the few casts in the isolated region, which are
+the point of the figure, and a scale per panel would hide the differences between learners.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.collections import PatchCollection
+from matplotlib.colors import LogNorm, Normalize
+from matplotlib.patches import Circle, Rectangle
+
+from sgim_nodes.analysis.statistics import Curve
+from sgim_nodes.analysis.study import STATUS_OK, RunData, Study
+from sim_bridge.lake import ISOLATED_REGION, draw_shoreline
+
+COLOURS = {"sgim-d": "tab:red", "saggriac": "tab:blue", "demo-only": "tab:green",
+           "random": "tab:gray"}
+TREE_LEARNERS = ("sgim-d", "saggriac")
+BINS = 40
+DPI = 110
+
+
+def colour(learner: str, k: int) -> str:
+    return COLOURS.get(learner, f"C{k % 10}")
+
+
+def _outline_isolated(ax: plt.Axes) -> None:
+    ax.add_patch(Circle(ISOLATED_REGION["centre"], ISOLATED_REGION["radius"], fill=False,
+                        edgecolor="black", linestyle="--", linewidth=1.0))
+
+
+def _outcome_axes(ax: plt.Axes) -> None:
+    ax.set_xlim(-1, 1)
+    ax.set_ylim(-1, 1)
+    ax.set_aspect("equal")
+    ax.tick_params(labelsize=7)
+
+
+def plot_error_curves(curves: dict[str, Curve], path: Path) -> Path:
+    fig, ax = plt.subplots(figsize=(8, 5))
+    for k, (learner, c) in enumerate(curves.items()):
+        col = colour(learner, k)
+        n = f"{int(c.n.min())}" if c.n.min() == c.n.max() else f"{int(c.n.min())}-{int(c.n.max())}"
+        ax.plot(c.movements, c.mean, "-o", color=col, markersize=3, linewidth=1.5,
+                label=f"{learner} ({n} run{'s' if c.n.max() > 1 else ''})")
+        band = np.isfinite(c.low)
+        if band.any():
+            ax.fill_between(c.movements[band], c.low[band], c.high[band], color=col, alpha=0.2,
+                            linewidth=0)
+    ax.set_xlabel("movements")
+    ax.set_ylabel("mean distance to the benchmark goals (outcome units)")
+    ax.set_title("Error on the benchmark goals: mean and 95 % interval over seeds")
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+    return path
+
+
+def _landings(runs: list[RunData], end: int) -> np.ndarray:
+    parts = [r.outcome[(r.movement_index <= end) & (r.status == STATUS_OK)] for r in runs]
+    points = np.concatenate(parts) if parts else np.zeros((0, 2))
+    return points[np.isfinite(points).all(axis=1)]
+
+
+def plot_landings(study: Study, frames: Sequence[int], path: Path) -> Path:
+    """Rows learners, columns movements 1..frame; each panel is the share of the frame's
+    landings per bin (so frames of different lengths compare), pooled over the seeds."""
+    learners = study.learners
+    edges = np.linspace(-1, 1, BINS + 1)
+    shares: dict[tuple[str, int], tuple[np.ndarray, int]] = {}
+    for learner in learners:
+        for end in frames:
+            points = _landings(study.runs_of(learner), end)
+            counts, _, _ = np.histogram2d(points[:, 0], points[:, 1], bins=[edges, edges])
+            shares[learner, end] = (counts / max(len(points), 1), len(points))
+    positive = [s[s > 0] for s, _ in shares.values() if (s > 0).any()]
+    low = min((float(p.min()) for p in positive), default=1e-4)
+    high = max((float(p.max()) for p in positive), default=1.0)
+    norm = LogNorm(vmin=low, vmax=max(high, low * 10))
+    rows, cols = len(learners), len(frames)
+    fig, axes = plt.subplots(rows, cols, figsize=(2.8 * cols + 1.2, 2.7 * rows + 0.6),
+                             squeeze=False)
+    mesh = None
+    for i, learner in enumerate(learners):
+        n_runs = len(study.runs_of(learner))
+        for j, end in enumerate(frames):
+            ax = axes[i][j]
+            share, count = shares[learner, end]
+            masked = np.ma.masked_where(share.T <= 0, share.T)
+            mesh = ax.pcolormesh(edges, edges, masked, norm=norm, cmap="viridis")
+            draw_shoreline(ax, resolution=160, colors="0.6", linewidths=0.5)
+            _outline_isolated(ax)
+            _outcome_axes(ax)
+            ax.text(0.02, 0.02, f"{count} landings", transform=ax.transAxes, fontsize=7)
+            if i == 0:
+                ax.set_title(f"movements 1-{end}", fontsize=9)
+            if j == 0:
+                ax.set_ylabel(f"{learner}\n({n_runs} run{'s' if n_runs > 1 else ''})",
+                              fontsize=9)
+    fig.suptitle("Where the hook landed (share of the frame's landings per bin, pooled over "
+                 "seeds; dashed: isolated region)", fontsize=10)
+    fig.tight_layout(rect=(0, 0, 0.9, 0.96))
+    if mesh is not None:
+        fig.colorbar(mesh, cax=fig.add_axes((0.92, 0.15, 0.02, 0.7)), label="share of landings")
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+    return path
+
+
+def tree_runs(study: Study, seed: int | None = None) -> list[RunData]:
+    """One run per tree-building learner: the requested seed, else the lowest with maps."""
+    chosen = []
+    for learner in TREE_LEARNERS:
+        runs = [r for r in study.runs_of(learner) if len(r.map_index)]
+        preferred = [r for r in runs if r.seed == seed]
+        if preferred or runs:
+            chosen.append((preferred or runs)[0])
+    return chosen
+
+
+def plot_region_trees(study: Study, times: Sequence[int], path: Path, seed: int | None = None
+                      ) -> Path | None:
+    """Leaves of the recorded RegionMap closest to each time; None when no run has a tree."""
+    runs = tree_runs(study, seed)
+    if not runs:
+        return None
+    snapshots = {(r.name, t): r.region_map_at(t) for r in runs for t in times}
+    interests = np.concatenate([s[3] for s in snapshots.values()] + [np.zeros(1)])
+    norm = Normalize(vmin=min(0.0, float(interests.min())),
+                     vmax=max(float(interests.max()), 1e-9))
+    cols = len(times)
+    fig, axes = plt.subplots(len(runs), cols, figsize=(2.9 * cols + 1.2, 2.9 * len(runs) + 0.6),
+                             squeeze=False)
+    for i, run in enumerate(runs):
+        for j, t in enumerate(times):
+            ax = axes[i][j]
+            at, lower, upper, interest = snapshots[run.name, t]
+            boxes = [Rectangle(lo, *(hi - lo)) for lo, hi in zip(lower, upper, strict=True)]
+            patches = PatchCollection(boxes, cmap="magma", norm=norm, edgecolor="white",
+                                      linewidth=0.4)
+            patches.set_array(interest)
+            ax.add_collection(patches)
+            _outline_isolated(ax)
+            _outcome_axes(ax)
+            ax.set_title(f"movement {t}\n(map at {at}, {len(boxes)} leaves)", fontsize=8)
+            if j == 0:
+                ax.set_ylabel(f"{run.learner} seed {run.seed}", fontsize=9)
+    fig.suptitle("Interest tree: leaf regions coloured by interest (competence progress)",
+                 fontsize=10)
+    fig.tight_layout(rect=(0, 0, 0.9, 0.95))
+    mappable = plt.cm.ScalarMappable(norm=norm, cmap="magma")
+    fig.colorbar(mappable, cax=fig.add_axes((0.92, 0.15, 0.02, 0.7)), label="interest")
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+    return path

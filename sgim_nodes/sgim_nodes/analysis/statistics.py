@@ -1,0 +1,228 @@
+"""The study's numbers: error over seeds, pairwise tests of final errors, isolated-region coverage.
+
+Why these: the paper's claims are comparisons between learners (closer to the benchmark goals,
+wider exploration), so every number comes with its spread over seeds. The interval is t-based
+because a study has few seeds (10), where a normal interval would be too narrow. Two tests
+are given for each pair: Welch's t (means, unequal variances) and Mann-Whitney U (ranks, no
+normality assumed), since final errors of a few seeds are rarely normal. With one run on a side
+there is no spread, so intervals and tests are reported as not applicable (None), not faked.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from itertools import combinations
+
+import numpy as np
+from scipy import stats
+
+from sgim_nodes.analysis.study import (
+    PROCESS_DEMONSTRATION,
+    PROCESS_IMITATION,
+    STATUS_OK,
+    RunData,
+    Study,
+)
+from sim_bridge.lake import in_isolated_region
+
+CONFIDENCE = 0.95
+ALPHA = 0.05
+
+
+@dataclass(frozen=True)
+class Interval:
+    """Mean and two-sided t interval over n values; low/high are None when n < 2."""
+
+    mean: float | None
+    low: float | None
+    high: float | None
+    n: int
+
+    @property
+    def half_width(self) -> float | None:
+        return None if self.low is None or self.high is None else (self.high - self.low) / 2
+
+
+def mean_ci(values: np.ndarray | list[float], confidence: float = CONFIDENCE) -> Interval:
+    """Mean of the finite values and its t interval: mean +- t(n-1) * sd / sqrt(n)."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    n = len(v)
+    if n == 0:
+        return Interval(None, None, None, 0)
+    mean = float(v.mean())
+    if n < 2:
+        return Interval(mean, None, None, n)
+    half = float(stats.t.ppf(0.5 + confidence / 2, n - 1) * v.std(ddof=1) / math.sqrt(n))
+    return Interval(mean, mean - half, mean + half, n)
+
+
+@dataclass
+class Curve:
+    """One learner's error at every evaluation point (runs lacking a point are left out)."""
+
+    learner: str
+    movements: np.ndarray
+    mean: np.ndarray
+    low: np.ndarray  # NaN where fewer than 2 runs
+    high: np.ndarray
+    n: np.ndarray
+
+
+def error_curves(study: Study) -> dict[str, Curve]:
+    curves = {}
+    for learner in study.learners:
+        runs = [r for r in study.runs_of(learner) if len(r.eval_index)]
+        if not runs:
+            continue
+        points = np.unique(np.concatenate([r.eval_index for r in runs]))
+        rows = [mean_ci([r.eval_mean[r.eval_index == p][0] for r in runs if p in r.eval_index])
+                for p in points]
+        nan = float("nan")
+        curves[learner] = Curve(
+            learner, points, np.array([c.mean for c in rows], dtype=float),
+            np.array([nan if c.low is None else c.low for c in rows]),
+            np.array([nan if c.high is None else c.high for c in rows]),
+            np.array([c.n for c in rows]))
+    return curves
+
+
+@dataclass
+class FinalErrors:
+    """Each run's last evaluation (the error after its whole budget, for a finished run)."""
+
+    learner: str
+    seeds: list[int]
+    movements: list[int]  # movement count of each run's last evaluation
+    values: list[float]
+    interval: Interval
+
+
+def final_errors(study: Study) -> dict[str, FinalErrors]:
+    out = {}
+    for learner in study.learners:
+        runs = [r for r in study.runs_of(learner) if len(r.eval_index)]
+        if runs:
+            values = [float(r.eval_mean[-1]) for r in runs]
+            out[learner] = FinalErrors(learner, [r.seed for r in runs],
+                                       [int(r.eval_index[-1]) for r in runs], values,
+                                       mean_ci(values))
+    return out
+
+
+@dataclass(frozen=True)
+class PairTest:
+    """Final errors of learner a against b; p-values are None when either has < 2 runs."""
+
+    a: str
+    b: str
+    n_a: int
+    n_b: int
+    mean_difference: float  # mean(a) - mean(b): negative when a ends closer to the goals
+    closer: str  # the learner with the lower mean final error ("" on a tie)
+    welch_t: float | None
+    welch_p: float | None
+    mann_whitney_u: float | None
+    mann_whitney_p: float | None
+
+    @property
+    def applicable(self) -> bool:
+        return self.welch_p is not None or self.mann_whitney_p is not None
+
+    @property
+    def significant(self) -> bool:
+        ps = [p for p in (self.welch_p, self.mann_whitney_p) if p is not None]
+        return bool(ps) and max(ps) < ALPHA  # both tests agree
+
+
+def _finite(value: float) -> float | None:
+    return float(value) if np.isfinite(value) else None
+
+
+def compare(a: str, va: list[float], b: str, vb: list[float]) -> PairTest:
+    diff = float(np.mean(va) - np.mean(vb))
+    closer = a if diff < 0 else b if diff > 0 else ""
+    if len(va) < 2 or len(vb) < 2:
+        return PairTest(a, b, len(va), len(vb), diff, closer, None, None, None, None)
+    welch = stats.ttest_ind(va, vb, equal_var=False)  # NaN when both sides are constant
+    mwu = stats.mannwhitneyu(va, vb, alternative="two-sided")
+    return PairTest(a, b, len(va), len(vb), diff, closer, _finite(welch.statistic),
+                    _finite(welch.pvalue), float(mwu.statistic), float(mwu.pvalue))
+
+
+def pairwise_tests(finals: dict[str, FinalErrors]) -> list[PairTest]:
+    return [compare(a, finals[a].values, b, finals[b].values)
+            for a, b in combinations(list(finals), 2)]
+
+
+@dataclass
+class RunCoverage:
+    """How one run's outcomes met the isolated region (only valid outcomes count)."""
+
+    seed: int
+    outcomes: int  # movements with a valid outcome (STATUS_OK)
+    in_region: int
+    own_in_region: int  # of which not an imitation or the demonstration itself
+    first_movement: int | None  # the first movement that landed there
+
+    @property
+    def share(self) -> float:
+        return self.in_region / self.outcomes if self.outcomes else 0.0
+
+
+@dataclass
+class Coverage:
+    learner: str
+    runs: list[RunCoverage] = field(default_factory=list)
+
+    @property
+    def runs_reached(self) -> int:
+        return sum(r.in_region > 0 for r in self.runs)
+
+    @property
+    def share(self) -> Interval:
+        return mean_ci([r.share for r in self.runs])
+
+    @property
+    def first_movement_median(self) -> float | None:
+        firsts = [r.first_movement for r in self.runs if r.first_movement is not None]
+        return float(np.median(firsts)) if firsts else None
+
+
+def run_coverage(run: RunData) -> RunCoverage:
+    ok = (run.status == STATUS_OK) & np.isfinite(run.outcome).all(axis=1)
+    inside = ok & in_isolated_region(np.nan_to_num(run.outcome, nan=9.0))
+    own = inside & ~np.isin(run.process, [PROCESS_IMITATION, PROCESS_DEMONSTRATION])
+    first = int(run.movement_index[inside].min()) if inside.any() else None
+    return RunCoverage(run.seed, int(ok.sum()), int(inside.sum()), int(own.sum()), first)
+
+
+def isolated_coverage(study: Study) -> dict[str, Coverage]:
+    return {learner: Coverage(learner, [run_coverage(r) for r in study.runs_of(learner)])
+            for learner in study.learners}
+
+
+@dataclass
+class RunSummary:
+    """What the metadata says about a learner's runs: how many, finished, how long."""
+
+    learner: str
+    runs: int
+    finished: int
+    seeds: list[int]
+    movements: list[int]
+    total_duration_s: float | None
+    mean_duration_s: float | None
+
+
+def run_summaries(study: Study) -> dict[str, RunSummary]:
+    out = {}
+    for learner in study.learners:
+        runs = study.runs_of(learner)
+        durations = [d for d in (r.duration_s for r in runs) if d is not None]
+        out[learner] = RunSummary(
+            learner, len(runs), sum(r.finished for r in runs), [r.seed for r in runs],
+            [r.movements_done for r in runs], float(sum(durations)) if durations else None,
+            float(np.mean(durations)) if durations else None)
+    return out

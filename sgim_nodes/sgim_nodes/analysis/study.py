@@ -1,0 +1,318 @@
+"""Find the runs of a study folder and load each bag once into compact numpy arrays.
+
+Why arrays and a cache: a 5000-movement bag holds tens of thousands of messages and takes
+seconds to deserialise; the statistics and figures only need a few columns of it. Each run's
+columns are saved next to its bag (`analysis_cache.npz`, keyed by the bag files' sizes and
+mtimes), so changing a figure option re-reads nothing. A damaged bag must not stop a study:
+whatever is readable is used, the damage is reported naming the file, and a run with nothing
+readable is skipped.
+
+Layout: `<study>/<learner>-seed<N>/bag/` plus `metadata.yaml` (learner, seed, movements, outcome,
+duration_s); the metadata wins over the folder name when both exist.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from sgim_nodes.bag_reader import BagReadWarning, NotABagError, _Deserializer, read_raw
+from sgim_nodes.bag_records import (
+    DemonstrationRecord,
+    EvaluationRecord,
+    MovementRecord,
+    RegionMapRecord,
+    RunStatusRecord,
+    to_record,
+)
+from sgim_nodes.bag_types import TOPICS
+
+CACHE_NAME = "analysis_cache.npz"
+CACHE_VERSION = 1
+OUTCOME_SIZE = 2
+PROCESS_IMITATION, PROCESS_DEMONSTRATION, PROCESS_EVALUATION = 2, 3, 5
+STATUS_OK = 0
+LEARNER_ORDER = ("sgim-d", "saggriac", "demo-only", "random")
+_RUN_NAME = re.compile(r"^(?P<learner>.+)-seed(?P<seed>\d+)$")
+_WANTED = {"movements": MovementRecord, "evaluations": EvaluationRecord,
+           "region_map": RegionMapRecord, "demonstrations": DemonstrationRecord,
+           "run_status": RunStatusRecord}
+
+Warn = Callable[[str], None]
+
+
+class AnalysisWarning(UserWarning):
+    """A run of the study is damaged or incomplete; the analysis went on without (part of) it."""
+
+
+def _default_warn(message: str) -> None:
+    warnings.warn(AnalysisWarning(message), stacklevel=3)
+
+
+@dataclass
+class RunData:
+    """The columns of one run the analysis needs; outcome rows are NaN when the cast failed."""
+
+    name: str
+    path: Path
+    learner: str
+    seed: int
+    metadata: dict
+    movement_index: np.ndarray  # (N,) learner movement count, 1-based
+    process: np.ndarray  # (N,) Movement.PROCESS_*
+    status: np.ndarray  # (N,) Movement.STATUS_*
+    outcome: np.ndarray  # (N, 2)
+    eval_index: np.ndarray  # (E,) movement count of each evaluation, increasing
+    eval_mean: np.ndarray  # (E,) mean distance to the benchmark goals
+    demo_index: np.ndarray  # (D,)
+    demo_outcome: np.ndarray  # (D, 2)
+    map_index: np.ndarray  # (M,) movement count of each region map, increasing
+    map_offsets: np.ndarray  # (M + 1,) leaves of map k are rows offsets[k]:offsets[k+1]
+    leaf_lower: np.ndarray  # (R, 2)
+    leaf_upper: np.ndarray  # (R, 2)
+    leaf_interest: np.ndarray  # (R,)
+    budget: int = -1  # RunStatus.total_movements, -1 when never published
+    final_state: int = -1  # the last RunStatus.state, -1 when none
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def total_movements(self) -> int:
+        """The run's movement budget: metadata first, then the bag, then what was done."""
+        for value in (self.metadata.get("movements"), self.budget):
+            if isinstance(value, int) and value > 0:
+                return value
+        return int(self.movement_index.max()) if len(self.movement_index) else 0
+
+    @property
+    def movements_done(self) -> int:
+        return int(self.movement_index.max()) if len(self.movement_index) else 0
+
+    @property
+    def duration_s(self) -> float | None:
+        value = self.metadata.get("duration_s")
+        return float(value) if isinstance(value, int | float) else None
+
+    @property
+    def finished(self) -> bool:
+        return self.metadata.get("outcome") == "finished" or self.final_state == 1
+
+    def region_map_at(self, movement: int) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+        """(map movement count, lower, upper, interest) of the leaves of the map closest to
+        `movement`; the later map wins a tie, since it holds the same goals and more."""
+        if not len(self.map_index):
+            empty = np.zeros((0, OUTCOME_SIZE))
+            return -1, empty, empty, np.zeros(0)
+        k = int(np.argmin(np.abs(self.map_index[::-1] - movement)))
+        k = len(self.map_index) - 1 - k
+        rows = slice(int(self.map_offsets[k]), int(self.map_offsets[k + 1]))
+        return (int(self.map_index[k]), self.leaf_lower[rows], self.leaf_upper[rows],
+                self.leaf_interest[rows])
+
+
+@dataclass
+class Study:
+    path: Path
+    runs: list[RunData]
+    skipped: dict[str, str]  # run name -> why
+    warnings: list[str]
+
+    @property
+    def learners(self) -> list[str]:
+        """Learners present, in the paper's order, unknown names after them."""
+        names = {r.learner for r in self.runs}
+        known = [n for n in LEARNER_ORDER if n in names]
+        return known + sorted(names - set(known))
+
+    def runs_of(self, learner: str) -> list[RunData]:
+        return sorted((r for r in self.runs if r.learner == learner), key=lambda r: r.seed)
+
+
+def _point(values: np.ndarray) -> np.ndarray:
+    return values[:OUTCOME_SIZE] if len(values) >= OUTCOME_SIZE else np.full(OUTCOME_SIZE, np.nan)
+
+
+def _read_bag(bag: Path) -> tuple[dict[str, np.ndarray], list[str]]:
+    """Deserialise the topics we need; a bad message is skipped rather than ending the run."""
+    records: dict[str, list] = {name: [] for name in _WANTED}
+    bad: list[str] = []
+    deserialize = _Deserializer()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for raw in read_raw(bag, _WANTED):
+            name = raw.topic.rsplit("/", 1)[-1]
+            if raw.msgtype != TOPICS.get(name):
+                continue
+            try:
+                records[name].append(to_record(_WANTED[name], raw.timestamp_ns,
+                                               deserialize(raw)))
+            except Exception as error:
+                if len(bad) < 3:
+                    bad.append(f"{bag}: undecodable {name} message skipped: {error}")
+    notes = [str(w.message) for w in caught if issubclass(w.category, BagReadWarning)] + bad
+    return _columns(records), notes
+
+
+def _columns(records: dict[str, list]) -> dict[str, np.ndarray]:
+    moves = [m for m in records["movements"] if m.process != PROCESS_EVALUATION]
+    evals: dict[int, float] = {}
+    for e in records["evaluations"]:
+        evals[e.movement_index] = e.mean_distance  # a repeated point: the latest wins
+    maps: dict[int, RegionMapRecord] = {}
+    for m in records["region_map"]:
+        maps[m.movement_index] = m  # the state after the last change at that count
+    map_keys = sorted(maps)
+    leaves = [[r for r in maps[k].regions if r.is_leaf] for k in map_keys]
+    flat = [r for group in leaves for r in group]
+    status = records["run_status"]
+    return {
+        "movement_index": np.array([m.index for m in moves], dtype=np.int64),
+        "process": np.array([m.process for m in moves], dtype=np.uint8),
+        "status": np.array([m.status for m in moves], dtype=np.uint8),
+        "outcome": np.array([_point(m.outcome) for m in moves]).reshape(-1, OUTCOME_SIZE),
+        "eval_index": np.array(sorted(evals), dtype=np.int64),
+        "eval_mean": np.array([evals[k] for k in sorted(evals)], dtype=float),
+        "demo_index": np.array([d.movement_index for d in records["demonstrations"]],
+                               dtype=np.int64),
+        "demo_outcome": np.array([_point(d.outcome) for d in records["demonstrations"]]
+                                 ).reshape(-1, OUTCOME_SIZE),
+        "map_index": np.array(map_keys, dtype=np.int64),
+        "map_offsets": np.concatenate([[0], np.cumsum([len(g) for g in leaves])]
+                                      ).astype(np.int64),
+        "leaf_lower": np.array([_point(r.lower) for r in flat]).reshape(-1, OUTCOME_SIZE),
+        "leaf_upper": np.array([_point(r.upper) for r in flat]).reshape(-1, OUTCOME_SIZE),
+        "leaf_interest": np.array([r.interest for r in flat], dtype=float),
+        "budget": np.array(max((s.total_movements for s in status), default=-1)),
+        "final_state": np.array(status[-1].state if status else -1),
+    }
+
+
+def bag_fingerprint(bag: Path) -> str:
+    """Names, sizes and mtimes of every file of the bag: any rewrite changes it."""
+    parts = [f"v{CACHE_VERSION}"]
+    for file in sorted(p for p in bag.rglob("*") if p.is_file()):
+        info = file.stat()
+        parts.append(f"{file.relative_to(bag)}:{info.st_size}:{info.st_mtime_ns}")
+    return "|".join(parts)
+
+
+def _load_cache(cache: Path, fingerprint: str) -> tuple[dict[str, np.ndarray], list[str]] | None:
+    try:
+        with np.load(cache, allow_pickle=False) as data:
+            if str(data["fingerprint"]) != fingerprint:
+                return None
+            columns = {k: data[k] for k in data.files if k not in ("fingerprint", "notes")}
+            return columns, [str(n) for n in data["notes"]]
+    except (OSError, KeyError, ValueError):
+        return None  # missing, stale format or damaged: read the bag again
+
+
+def _save_cache(cache: Path, fingerprint: str, columns: dict[str, np.ndarray],
+                notes: list[str], warn: Warn) -> None:
+    tmp = cache.with_name(f".{cache.name}.{os.getpid()}.tmp.npz")
+    try:
+        np.savez_compressed(tmp, fingerprint=np.array(fingerprint),
+                            notes=np.array(notes, dtype=str), **columns)
+        os.replace(tmp, cache)  # atomic: a concurrent reader never sees half a file
+    except OSError as error:
+        tmp.unlink(missing_ok=True)
+        warn(f"could not write the cache {cache} ({error}): the next analysis re-reads the bag")
+
+
+def read_metadata(run_dir: Path, warn: Warn = _default_warn) -> dict:
+    meta = run_dir / "metadata.yaml"
+    if not meta.exists():
+        return {}
+    try:
+        data = yaml.safe_load(meta.read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError) as error:
+        warn(f"{meta} is unreadable ({str(error).splitlines()[0]}): using the folder name")
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def load_run_data(run_dir: Path, use_cache: bool = True, warn: Warn = _default_warn
+                  ) -> RunData | None:
+    """One run's arrays, from its cache when the bag did not change; None when unusable."""
+    run_dir = Path(run_dir)
+    name = run_dir.name
+    metadata = read_metadata(run_dir, warn)
+    match = _RUN_NAME.match(name)
+    learner = metadata.get("learner") or (match["learner"] if match else None)
+    seed = metadata.get("seed", int(match["seed"]) if match else None)
+    if not isinstance(learner, str) or not isinstance(seed, int):
+        warn(f"{run_dir}: neither metadata.yaml nor the folder name gives learner and seed: "
+             "skipped")
+        return None
+    bag = run_dir / "bag"
+    if not bag.exists():
+        warn(f"{run_dir}: no bag/ folder: skipped")
+        return None
+    fingerprint = bag_fingerprint(bag)
+    cache = run_dir / CACHE_NAME
+    cached = _load_cache(cache, fingerprint) if use_cache else None
+    if cached is None:
+        try:
+            columns, notes = _read_bag(bag)
+        except (NotABagError, OSError) as error:
+            warn(f"{bag}: unreadable, run skipped: {error}")
+            return None
+        except Exception as error:  # a damaged bag must not stop the study
+            warn(f"{bag}: reading failed, run skipped: {type(error).__name__}: {error}")
+            return None
+        _save_cache(cache, fingerprint, columns, notes, warn)
+    else:
+        columns, notes = cached
+    for note in notes:
+        warn(f"{name}: {note}")
+    scalars = {k: int(columns.pop(k)) for k in ("budget", "final_state")}
+    run = RunData(name=name, path=run_dir, learner=learner, seed=seed, metadata=metadata,
+                  warnings=list(notes), **columns, **scalars)
+    if not len(run.movement_index) and not len(run.eval_index):
+        warn(f"{bag}: no movement and no evaluation could be read: run skipped")
+        return None
+    if metadata and not run.finished:
+        warn(f"{name}: run not finished (outcome {metadata.get('outcome', 'unknown')!r}, "
+             f"{run.movements_done}/{run.total_movements} movements): using what it recorded")
+    return run
+
+
+def discover_runs(study_dir: Path) -> list[Path]:
+    """Run folders: those holding a bag/ or a metadata.yaml (the folder itself if it is one)."""
+    study_dir = Path(study_dir)
+    if (study_dir / "bag").is_dir():
+        return [study_dir]
+    return sorted(p for p in study_dir.iterdir()
+                  if p.is_dir() and ((p / "bag").is_dir() or (p / "metadata.yaml").exists()))
+
+
+def load_study(study_dir: str | Path, use_cache: bool = True, warn: Warn = _default_warn,
+               progress: Callable[[str], None] | None = None) -> Study:
+    """Every usable run of the study; `progress(name)` is called after each run is loaded."""
+    study_dir = Path(study_dir)
+    if not study_dir.is_dir():
+        raise FileNotFoundError(f"{study_dir} is not a folder")
+    collected: list[str] = []
+
+    def note(message: str) -> None:
+        collected.append(message)
+        warn(message)
+
+    runs: list[RunData] = []
+    skipped: dict[str, str] = {}
+    for run_dir in discover_runs(study_dir):
+        before = len(collected)
+        run = load_run_data(run_dir, use_cache, note)
+        if run is None:
+            skipped[run_dir.name] = collected[-1] if len(collected) > before else "unusable"
+        else:
+            runs.append(run)
+        if progress:
+            progress(run_dir.name)
+    return Study(study_dir, runs, skipped, collected)

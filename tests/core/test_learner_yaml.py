@@ -1,0 +1,21 @@
+"""The parameter file every node reads says what LearnerConfig says."""
+
+from dataclasses import fields
+
+import yaml
+
+from sgim_nodes.core.config import LearnerConfig
+from tests.conftest import REPO
+
+
+def test_learner_yaml_holds_every_learner_default():
+    text = (REPO / "sgim_nodes" / "config" / "learner.yaml").read_text()
+    values = yaml.safe_load(text)["/**"]["ros__parameters"]
+    default = LearnerConfig()
+    for f in fields(LearnerConfig):
+        if f.name == "origin":
+            continue
+        assert values[f.name] == getattr(default, f.name), f.name
+    # The run's own settings are the paper's.
+    assert values["movements"] == 5000 and values["eval_every"] == 250
+    assert values["demonstration_period"] == 150 and values["action_size"] == 24
