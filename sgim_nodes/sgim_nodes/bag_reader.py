@@ -198,7 +198,25 @@ def load_run(path: str | Path, topics: Iterable[str] | None = None) -> RunRecord
             continue
         getattr(run, name).append(to_record(RECORD_TYPES[name], record.timestamp_ns,
                                             deserialize(record)))
+    run.movements = superseded_removed(run.movements, str(path))
     return run
+
+
+def superseded_removed(movements: list, where: str) -> list:
+    """One record per movement index: the last one.
+
+    An index is recorded twice when the simulator died after publishing a movement but before
+    its answer reached the learner: the learner executed that movement again with the same
+    index (sim_client.py), and only the later record is the one it learned from.
+    """
+    last = {m.index: k for k, m in enumerate(movements)}
+    if len(last) == len(movements):
+        return movements
+    doubled = sorted({m.index for k, m in enumerate(movements) if last[m.index] != k})
+    warnings.warn(f"{where}: movement(s) {doubled} recorded more than once (re-executed after "
+                  "a simulator restart); keeping the last record of each", BagReadWarning,
+                  stacklevel=3)
+    return [m for k, m in enumerate(movements) if last[m.index] == k]
 
 
 def load_movements(path: str | Path) -> list:

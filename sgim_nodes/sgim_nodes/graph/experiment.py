@@ -38,6 +38,11 @@ REPO = Path(__file__).resolve().parents[3]
 ROS2RUN = REPO / "ros_ws" / "ros2run.sh"
 LEARNER_CONFIG = REPO / "sgim_nodes" / "config" / "learner.yaml"
 SOCIAL = ("sgim-d", "demo-only")
+# The simulator holds no learning state and its clients retry a call it never answered
+# (sim_client.py), so it is restarted when it dies; the other nodes hold the learner's memory,
+# tree or count, or serve calls that are not retried: losing one ends the run, clearly.
+RESPAWNED = ("sim_bridge",)
+MAX_RESPAWNS = 3
 # The arbiter only knows synchronous (automatic) and asynchronous (human) demonstrations.
 TEACHER_MODES = {"automatic": "automatic", "human": "human", "external": "human"}
 
@@ -201,31 +206,41 @@ def run(args: argparse.Namespace) -> int:
           f"domain {domain}, {len(nodes)} nodes -> {run_dir}", file=sys.stderr)
     group = ProcessGroup(env=env, log_dir=run_dir / "logs")
     progress = human = None
+    respawns: dict[str, int] = {}
     outcome, code = "unknown", 1
     started = time.monotonic()
     interrupted = False
     previous = signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt))
     try:
         progress = Progress(args.movements, args.quiet)
-        for package, executable in nodes:
-            group.start(executable, [str(ROS2RUN), package, executable, "--ros-args",
-                                     "--params-file", str(params_file)])
+        packages = dict((exe, pkg) for pkg, exe in nodes)
+
+        def launch(executable: str, log_name: str) -> subprocess.Popen:
+            return group.start(log_name, [str(ROS2RUN), packages[executable], executable,
+                                          "--ros-args", "--params-file", str(params_file)])
+
+        procs = {exe: launch(exe, exe) for _, exe in nodes}
         if args.teacher == "human" and args.learner in SOCIAL:
             human = subprocess.Popen([str(ROS2RUN), "teacher", "human_input", "--ros-args",
                                       "--params-file", str(params_file)], env=env)
-        arbiter, recorder = group.children[-1], group.children[0]
+        arbiter, recorder = procs["social_interaction"], procs["recorder"]
         while True:
             progress.spin(0.2)
-            dead = [c for c in group.children if c.poll() is not None and c is not arbiter
-                    and c is not recorder]
             if arbiter.poll() is not None or progress.over:
                 break
             if recorder.poll() is not None:
                 raise RuntimeError(f"the recorder stopped (exit {recorder.returncode}); see "
                                    f"{run_dir / 'logs' / 'recorder.log'}")
-            if dead:
-                names = [nodes[group.children.index(c)][1] for c in dead]
-                raise RuntimeError(f"node(s) {names} stopped; see {run_dir / 'logs'}")
+            for exe, child in list(procs.items()):
+                if child.poll() is None or child in (arbiter, recorder):
+                    continue
+                if exe not in RESPAWNED or respawns.get(exe, 0) >= MAX_RESPAWNS:
+                    raise RuntimeError(f"node {exe} stopped (exit {child.returncode}); see "
+                                       f"{run_dir / 'logs' / exe}.log")
+                respawns[exe] = respawns.get(exe, 0) + 1
+                print(f"run_experiment: {exe} stopped (exit {child.returncode}); restarting "
+                      f"it ({respawns[exe]}/{MAX_RESPAWNS})", file=sys.stderr)
+                procs[exe] = launch(exe, f"{exe}.restart{respawns[exe]}")
             if args.timeout and time.monotonic() - started > args.timeout:
                 raise RuntimeError(f"timed out after {args.timeout:g} s")
         arbiter.wait(timeout=60)
@@ -250,7 +265,7 @@ def run(args: argparse.Namespace) -> int:
             human.terminate()
         if reservation is not None:
             reservation.release()
-        meta.update(ended=datetime.now(UTC).isoformat(), outcome=outcome,
+        meta.update(ended=datetime.now(UTC).isoformat(), outcome=outcome, restarts=respawns,
                     duration_s=round(time.monotonic() - started, 2))
         (run_dir / "metadata.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
     print(f"run_experiment: {outcome}; bag and metadata in {run_dir}"
