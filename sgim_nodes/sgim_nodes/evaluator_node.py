@@ -22,8 +22,11 @@ from rclpy.node import Node
 
 from sgim_msgs.msg import Demonstration, Evaluation, Movement, RunStatus
 from sgim_nodes.core.evaluator import EVALUATION_SEED_OFFSET, Evaluator
-from sgim_nodes.core.learners import inverse_or_centre
+from sgim_nodes.core.inverse_model import InverseModel
+from sgim_nodes.core.learners import inverse_model_for, inverse_or_centre
 from sgim_nodes.movement_memory import MovementMemory
+from sgim_nodes.rebuild import rebuild_from_records
+from sgim_nodes.resume import records_until, resume_point
 from sgim_nodes.ros_glue import declare_learner, floats, run_node, vec
 from sgim_ros import qos
 from sgim_ros.params import Param, non_negative
@@ -51,6 +54,18 @@ class EvaluatorNode(Node):
         self.memory.after_store.append(self._after_movement)
         self.final: int | None = None
         self.done: set[int] = set()
+        self.missed: list[int] = []
+        if values["resume_from"]:
+            point = resume_point(values["resume_from"], config,
+                                 values["resume_segments"])
+            self.memory.resume(point)
+            self.done = set(point.evaluated)
+            # Evaluations the interruption cut short are done again on the memory of their
+            # time, rebuilt from the recordings, once the resumed run starts.
+            self.missed = [k for k in range(0, point.count + 1, self.every or point.count + 1)
+                           if k not in self.done]
+            self.done |= {0}
+            self._point, self._config = point, config
         self._out = self.create_publisher(Evaluation, "evaluations", qos.RECORDS)
         self.create_subscription(Demonstration, "demonstrations", self._on_demo, qos.RECORDS)
         self.create_subscription(RunStatus, "run_status", self._on_status, qos.RECORDS)
@@ -64,6 +79,11 @@ class EvaluatorNode(Node):
     def _on_status(self, msg: RunStatus) -> None:
         if 0 not in self.done:
             self._evaluate(0)
+        while self.missed:
+            k = self.missed.pop(0)
+            state = rebuild_from_records(records_until(self._point.records, k), self._config)
+            self.done.discard(k)
+            self._evaluate(k, inverse_model_for(state.memory, self._config))
         if msg.movement_index == msg.total_movements:
             self.final = msg.total_movements
             if self.memory.count >= self.final:
@@ -78,13 +98,14 @@ class EvaluatorNode(Node):
         if (self.every and n % self.every == 0) or n == self.final:
             self._evaluate(n)
 
-    def _evaluate(self, count: int) -> None:
+    def _evaluate(self, count: int, model: InverseModel | None = None) -> None:
         if count in self.done:
             return
         self.done.add(count)
         start = time.perf_counter()
+        model = model or self.memory.inverse_model
         result = self.evaluator.evaluate(
-            lambda goal: inverse_or_centre(self.memory.inverse_model, goal, self.action_size))
+            lambda goal: inverse_or_centre(model, goal, self.action_size))
         goals = self.evaluator.goals
         self._out.publish(Evaluation(
             stamp=self.get_clock().now().to_msg(), movement_index=count,

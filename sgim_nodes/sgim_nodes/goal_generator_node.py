@@ -21,6 +21,7 @@ from sgim_msgs.srv import ChooseGoal
 from sgim_nodes.core.goal_selection import GoalSelector
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.core.region_snapshot import RegionSnapshot
+from sgim_nodes.resume import resume_point
 from sgim_nodes.ros_glue import AsyncNode, declare_learner, floats, run_node, snapshot_from_msg
 from sgim_ros import qos
 from sgim_ros.params import Param, positive
@@ -41,6 +42,9 @@ class GoalGenerator(AsyncNode):
         self.radius = c.mode3_radius
         self.snapshot: RegionSnapshot | None = None
         self.goal_count = 0
+        if values["resume_from"]:
+            self.goal_count = resume_point(values["resume_from"], c,
+                                 values["resume_segments"]).goal_index
         self._waiters: list[tuple[int, Future]] = []
         self._goals = self.create_publisher(Goal, "goals", qos.RECORDS)
         self.create_subscription(RegionMap, "region_map", self._on_map, qos.LATEST_STATE)

@@ -20,6 +20,7 @@ from sgim_msgs.msg import Competence, RegionMap
 from sgim_nodes.core.competence import OUTCOME_HIGH, OUTCOME_LOW
 from sgim_nodes.core.region_snapshot import RegionIds, snapshot
 from sgim_nodes.core.region_tree import RegionTree
+from sgim_nodes.resume import resume_point
 from sgim_nodes.ros_glue import check_vector, declare_learner, region_map_msg, run_node, vec
 from sgim_ros import qos
 
@@ -34,6 +35,10 @@ class InterestComputer(Node):
                                c.zeta, c.min_goals_per_child, c.min_region_width)
         self.ids = RegionIds()
         self.goal_count = 0
+        if values["resume_from"]:
+            point = resume_point(values["resume_from"], c,
+                                 values["resume_segments"])
+            self.tree, self.goal_count = point.state.tree, point.state.n_competences
         self._map = self.create_publisher(RegionMap, "region_map", qos.LATEST_STATE)
         self.create_subscription(Competence, "competences", self._on_competence, qos.RECORDS)
         self._publish(0)

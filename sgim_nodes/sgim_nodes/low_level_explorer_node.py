@@ -28,6 +28,7 @@ from sgim_nodes.core.environment import MovementResult
 from sgim_nodes.core.goal_reaching import GoalAttempt
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.movement_memory import MovementMemory
+from sgim_nodes.resume import resume_point
 from sgim_nodes.ros_glue import (
     PROCESS_CODES,
     AsyncNode,
@@ -53,6 +54,9 @@ class LowLevelExplorer(AsyncNode):
         self.rng = component_rng(values["seed"], "explorer")
         self.origin = origin_vector(self.config.origin, self.outcome_size)
         self.memory = MovementMemory(self, self.config, self.action_size, self.outcome_size)
+        if values["resume_from"]:
+            self.memory.resume(resume_point(values["resume_from"], self.config,
+                                 values["resume_segments"]))
         self.sim = SimClient(self, values["service_timeout"], self.memory.recorded)
         self.busy = False
         self._competences = self.create_publisher(Competence, "competences", qos.RECORDS)

@@ -26,6 +26,7 @@ class MovementMemory:
     def __init__(self, node: Node, config: LearnerConfig, action_size: int,
                  outcome_size: int) -> None:
         self.node = node
+        self.config = config
         self.action_size, self.outcome_size = action_size, outcome_size
         self.memory, self.inverse_model = build_memory(config, action_size, outcome_size)
         self.count = 0  # highest learner movement index seen
@@ -90,6 +91,15 @@ class MovementMemory:
             else:
                 keep.append((index, action, outcome))
         self._deferred = keep
+
+    def resume(self, point) -> None:
+        """Start from a resumed run's memory and count (a resume.ResumePoint)."""
+        old = point.state.memory
+        for action, outcome, label in zip(old.actions, old.outcomes, old.labels, strict=True):
+            self.memory.add(action, outcome, label)
+        self.count = point.count
+        self.node.get_logger().info(f"resumed at movement {self.count} with "
+                                    f"{len(self.memory)} pairs in memory")
 
     def recorded(self, index: int) -> Movement | None:
         """The record of a recent movement, if it came in (see SimClient)."""

@@ -37,6 +37,7 @@ from sgim_msgs.msg import Competence, Demonstration, Evaluation, Movement, RunSt
 from sgim_msgs.srv import ChooseGoal, ExecuteAction, RegisterDemonstration
 from sgim_nodes.core.competence import competence, origin_vector
 from sgim_nodes.core.random_streams import component_rng
+from sgim_nodes.resume import resume_point
 from sgim_nodes.ros_glue import AsyncNode, check_vector, declare_learner, floats, run_node, vec
 from sgim_nodes.sim_client import SimClient, first_of
 from sgim_ros import qos
@@ -87,6 +88,7 @@ class SocialInteraction(AsyncNode):
         self.pending: deque[Demonstration] = deque()
         self.boundary_word: dict[int, Demonstration] = {}
         self.evaluated: set[int] = set()
+        self.turns_taken: set[int] = set()  # teacher boundaries already handled
         self.finished, self.exit_code = False, 0
         self._job = None  # the running action's goal handle, to cancel on a demonstration
         self._waiters: list[tuple[callable, Future]] = []
@@ -103,7 +105,23 @@ class SocialInteraction(AsyncNode):
         self._competences = self.create_publisher(Competence, "competences", qos.RECORDS)
         self.create_subscription(Demonstration, "demonstrations", self._on_demo, qos.RECORDS)
         self.create_subscription(Evaluation, "evaluations", self._on_evaluation, qos.RECORDS)
+        if values["resume_from"]:
+            self._resume(resume_point(values["resume_from"], self.config,
+                                 values["resume_segments"]))
         self._start_timer = self.create_timer(0.05, self._start)
+
+    def _resume(self, point) -> None:
+        self.count = point.count
+        self.goals_folded = point.state.n_competences
+        self.turns_taken = set(point.demonstration_turns)
+        self.evaluated = set(point.evaluated)
+        demo = point.latest_demonstration
+        if demo is not None and self.learner == "demo-only":
+            self.latest_demo = Demonstration(
+                index=demo.index, movement_index=demo.movement_index,
+                action=floats(demo.action), outcome=floats(demo.outcome),
+                teaching_set_index=demo.teaching_set_index, source=demo.source)
+        self.get_logger().info(f"resuming at movement {self.count}/{self.total}")
 
     # --- events -------------------------------------------------------------------------
     def _on_demo(self, msg: Demonstration) -> None:
@@ -140,7 +158,8 @@ class SocialInteraction(AsyncNode):
         self._start_timer.cancel()
         try:
             await self._wait_for_graph()
-            self._publish_status(RunStatus.STATE_RUNNING, "started")
+            self._publish_status(RunStatus.STATE_RUNNING,
+                                 f"resumed at {self.count}" if self.count else "started")
             await self._run()
             self._publish_status(RunStatus.STATE_RUNNING, "movement budget spent")
             if self.p["wait_for_evaluation"]:
@@ -198,11 +217,10 @@ class SocialInteraction(AsyncNode):
         await first_of(self, Future(), self.p["settle_time"])
 
     async def _run(self) -> None:
-        handled: set[int] = set()
         while self.count < self.total:
             boundary = self.sync_period and self.count % self.sync_period == 0
-            if boundary and self.count not in handled:
-                handled.add(self.count)
+            if boundary and self.count not in self.turns_taken:
+                self.turns_taken.add(self.count)
                 await self._until(lambda b=self.count: b in self.boundary_word,
                                   self.p["teacher_timeout"],
                                   f"the teacher's word at movement {self.count}")

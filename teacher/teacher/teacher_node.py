@@ -19,6 +19,7 @@ from rclpy.node import Node
 
 from sgim_msgs.msg import Demonstration, Movement, RunStatus
 from sgim_nodes.core.random_streams import component_rng
+from sgim_nodes.resume import resume_point
 from sgim_nodes.ros_glue import floats, run_node, vec
 from sgim_ros import qos
 from sgim_ros.params import Param, declare, non_negative
@@ -37,6 +38,9 @@ class TeacherNode(Node):
             Param("tolerance", 0.05, "distance under which a teaching goal counts as reached",
                   non_negative, ">= 0"),
             Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one"),
+            Param("resume_from", "", "run folder to resume (see sgim_nodes/resume.py)"),
+            Param("resume_segments", 0, "how many of its recordings to read (0: all)",
+                  lambda v: v >= 0, ">= 0"),
         ))
         ts = load_teaching_set(p["teaching_set"] or None)
         self.teacher = Teacher(ts.actions, ts.outcomes, component_rng(p["seed"], "teacher"),
@@ -46,6 +50,11 @@ class TeacherNode(Node):
         self.total: int | None = None
         self.given = 0
         self.answered: set[int] = set()
+        if p["resume_from"]:
+            point = resume_point(p["resume_from"], limit=p["resume_segments"])
+            self.reached = list(point.reached_outcomes)
+            self.count, self.answered = point.count, set(point.demonstration_turns)
+            self.given = point.demonstrations_given
         self._out = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
         self.create_subscription(Movement, "movements", self._on_movement, qos.RECORDS)
         self.create_subscription(RunStatus, "run_status", self._on_status, qos.RECORDS)

@@ -72,3 +72,43 @@ def test_a_killed_simulator_is_restarted_and_no_movement_is_lost_or_doubled(
     assert len(raw) - 300 <= 1 and raw[-1] == 300
     meta = yaml.safe_load((tmp_path / "sim-kill" / "metadata.yaml").read_text())
     assert meta["restarts"] == {"sim_bridge": 1} and meta["outcome"] == "finished"
+
+
+def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
+        ros_processes, ros_domain, tmp_path, rclpy_context):
+    from sgim_msgs.msg import Movement
+    from sgim_nodes.resume import load_run_folder, segments
+    from sgim_ros import qos
+    from tests.ros.graph_client import GraphClient
+
+    client = GraphClient(rclpy_context, "interrupter")
+    seen = client.capture(Movement, "/movements", qos.RECORDS)
+    common = ["--domain", str(ros_domain), "--quiet", "--timeout", "240"]
+    first = ros_processes.start(
+        "run-interrupted",
+        [RUN, "sgim-d", "--seed", "5", "--movements", "300", "--eval-every", "100",
+         "--period", "100", "--runs-dir", str(tmp_path), "--name", "cut", *common],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    assert client.spin_until(lambda: len(seen) >= 130, timeout=120)
+    first.send_signal(signal.SIGINT)  # Ctrl-C
+    output, _ = first.communicate(timeout=120)
+    client.close()
+    assert first.returncode == 130, output[-3000:]
+    cut = tmp_path / "cut"
+    before = load_run_folder(cut)
+    stopped_at = before.movements[-1].index
+    assert 130 <= stopped_at < 300 and [m.index for m in before.movements] == list(
+        range(1, stopped_at + 1))
+
+    second = ros_processes.start("run-resumed", [RUN, "--resume", str(cut), *common],
+                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    output, _ = second.communicate(timeout=300)
+    assert second.returncode == 0, output[-3000:]
+    assert [p.name for p in segments(cut)] == ["bag", "bag.resume1"]
+    run = load_run_folder(cut)
+    assert [m.index for m in run.movements] == list(range(1, 301))
+    assert {0, 100, 200, 300} <= {e.movement_index for e in run.evaluations}
+    turns = [d.movement_index for d in run.demonstrations]
+    assert sorted(turns) == [0, 100, 200] and len(set(turns)) == 3  # no turn given twice
+    meta = yaml.safe_load((cut / "metadata.yaml").read_text())
+    assert meta["outcome"] == "finished" and len(meta["resumed"]) == 1

@@ -46,7 +46,12 @@ def build_memory(config: LearnerConfig, action_dim: int,
     c = config
     memory = Memory(action_dim, outcome_dim, c.memory_rebuild_fraction, c.memory_min_tail,
                     c.memory_max_tail)
-    return memory, InverseModel(memory, c.l_max, c.k_max, c.alpha, c.interpolation_sigma)
+    return memory, inverse_model_for(memory, config)
+
+
+def inverse_model_for(memory: Memory, config: LearnerConfig) -> InverseModel:
+    c = config
+    return InverseModel(memory, c.l_max, c.k_max, c.alpha, c.interpolation_sigma)
 
 
 def inverse_or_centre(model: InverseModel, goal: np.ndarray, action_dim: int) -> np.ndarray:

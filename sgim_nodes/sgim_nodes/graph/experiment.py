@@ -33,6 +33,7 @@ import yaml
 from sgim_nodes.core.learners import LEARNER_NAMES
 from sgim_nodes.graph.domain import isolated_ros_environment, reserve_domain
 from sgim_nodes.graph.processes import ProcessGroup
+from sgim_nodes.resume import next_segment, segments
 
 REPO = Path(__file__).resolve().parents[3]
 ROS2RUN = REPO / "ros_ws" / "ros2run.sh"
@@ -101,7 +102,11 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         description="Run one learner through the ROS 2 node graph and record the run to a bag "
                     "in runs/. Example: ros_ws/run_experiment.sh sgim-d --seed 3 "
                     "--movements 5000")
-    p.add_argument("learner", choices=LEARNER_NAMES, help="which learner to run")
+    p.add_argument("learner", choices=LEARNER_NAMES, nargs="?",
+                   help="which learner to run (not with --resume)")
+    p.add_argument("--resume", type=Path, metavar="RUN_DIR",
+                   help="resume an interrupted run from its recordings, to its movement "
+                        "budget; the new recording goes beside the old ones (bag.resumeN)")
     p.add_argument("--seed", type=int, default=0, help="seed of the run (default: 0)")
     p.add_argument("--movements", type=int, default=5000,
                    help="movement budget; the paper's is 5000 (default: %(default)s)")
@@ -128,6 +133,8 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                    help="abort the run after this many seconds (default: none)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     args = p.parse_args(argv)
+    if (args.learner is None) == (args.resume is None):
+        p.error("give a learner, or --resume RUN_DIR (not both)")
     for name in ("movements", "period"):
         if getattr(args, name) < 1:
             p.error(f"--{name} must be >= 1")
@@ -181,21 +188,53 @@ class Progress:
         self.rclpy.try_shutdown(context=self.context)
 
 
+def prepare_resume(args: argparse.Namespace) -> tuple[Path, dict[str, Any], dict[str, Any],
+                                                        str] | None:
+    """The run folder, its parameters and metadata, and the new segment's name."""
+    run_dir = args.resume
+    try:
+        meta = yaml.safe_load((run_dir / "metadata.yaml").read_text())
+        params = yaml.safe_load((run_dir / "params.yaml").read_text())["/**"]["ros__parameters"]
+    except (OSError, yaml.YAMLError, KeyError, TypeError) as error:
+        print(f"run_experiment: {run_dir} is not a run folder ({error})", file=sys.stderr)
+        return None
+    segment = next_segment(run_dir)
+    params.update(resume_from=str(run_dir), resume_segments=len(segments(run_dir)),
+                  output=str(segment))
+    args.learner, args.seed, args.movements = meta["learner"], meta["seed"], meta["movements"]
+    return run_dir, params, meta, segment.name
+
+
 def run(args: argparse.Namespace) -> int:
-    stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
-    run_dir = args.runs_dir / (args.name or f"{args.learner}-seed{args.seed}-{stamp}")
-    if run_dir.exists():
-        print(f"run_experiment: {run_dir} exists; choose another --name", file=sys.stderr)
-        return 2
-    (run_dir / "logs").mkdir(parents=True)
-    params = parameters(args, run_dir)
-    params_file = run_dir / "params.yaml"
+    if args.resume is not None:
+        prepared = prepare_resume(args)
+        if prepared is None:
+            return 2
+        run_dir, params, meta, segment = prepared
+        if meta.get("outcome") == "finished":
+            print(f"run_experiment: {run_dir} already finished; nothing to resume",
+                  file=sys.stderr)
+            return 0
+        params_file = run_dir / f"params.{segment}.yaml"
+        log_dir = run_dir / "logs" / segment
+        meta.setdefault("resumed", []).append(
+            {"segment": segment, "at": datetime.now(UTC).isoformat()})
+    else:
+        stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
+        run_dir = args.runs_dir / (args.name or f"{args.learner}-seed{args.seed}-{stamp}")
+        if run_dir.exists():
+            print(f"run_experiment: {run_dir} exists; choose another --name, or --resume it",
+                  file=sys.stderr)
+            return 2
+        params, meta = parameters(args, run_dir), {}
+        params_file, log_dir = run_dir / "params.yaml", run_dir / "logs"
+    log_dir.mkdir(parents=True, exist_ok=True)
     params_file.write_text(yaml.safe_dump({"/**": {"ros__parameters": params}}))
     reservation = reserve_domain() if args.domain is None else None
     domain = args.domain if reservation is None else reservation.domain_id
     env = isolated_ros_environment(domain)
     os.environ.update(env)  # the launcher's own progress node joins the run's domain
-    meta: dict[str, Any] = {
+    meta = meta or {
         "learner": args.learner, "seed": args.seed, "movements": args.movements,
         "teacher": params["teacher"], "ros_domain_id": domain,
         "started": datetime.now(UTC).isoformat(), "parameters": params, "versions": versions(),
@@ -204,7 +243,7 @@ def run(args: argparse.Namespace) -> int:
     nodes = nodes_for(args.learner, params["teacher"])
     print(f"run_experiment: {args.learner}, seed {args.seed}, {args.movements} movements, "
           f"domain {domain}, {len(nodes)} nodes -> {run_dir}", file=sys.stderr)
-    group = ProcessGroup(env=env, log_dir=run_dir / "logs")
+    group = ProcessGroup(env=env, log_dir=log_dir)
     progress = human = None
     respawns: dict[str, int] = {}
     outcome, code = "unknown", 1
