@@ -175,3 +175,14 @@ def test_hook_never_starts_under_water() -> None:
         for a in rng.uniform(-1, 1, (30, 24)):
             a[0::4] = rng.choice([-1.0, 1.0], 6)  # extreme start postures
             assert w.execute(a).status != Status.PHYSICS_FAILURE
+
+
+def test_a_physics_blow_up_is_a_failed_cast_never_an_outcome() -> None:
+    """Springs far too stiff for the time step make the explicit rod torques explode: the
+    world must notice and report a failure, not a landing point."""
+    rng = np.random.default_rng(3)
+    with FishingWorld(seed=0) as w:
+        w._k = [1e6] * len(w._k)  # an unstable rod: the integration diverges within a cast
+        results = [w.execute(a) for a in rng.uniform(-1, 1, (5, 24))]
+    assert all(r.status == Status.PHYSICS_FAILURE for r in results), [r.message for r in results]
+    assert all(r.outcome is None and "exploded" in r.message for r in results)

@@ -1,0 +1,83 @@
+"""Bad input on the learner's interfaces gets a clear refusal, never a crash or a record."""
+
+from __future__ import annotations
+
+import subprocess
+
+import pytest
+
+from tests.conftest import REPO
+from tests.ros.graph_client import GraphClient
+
+pytestmark = pytest.mark.ros
+
+ROS2RUN = str(REPO / "ros_ws" / "ros2run.sh")
+
+
+@pytest.fixture
+def client(rclpy_context):
+    c = GraphClient(rclpy_context, "bad_input")
+    yield c
+    c.close()
+
+
+def test_explorer_refuses_bad_demonstrations_and_goals(ros_processes, client):
+    from action_msgs.msg import GoalStatus
+    from rclpy.action import ActionClient
+
+    from sgim_msgs.action import ReachGoal
+    from sgim_msgs.msg import Demonstration
+    from sgim_msgs.srv import RegisterDemonstration
+
+    ros_processes.start("explorer", [ROS2RUN, "sgim_nodes", "low_level_explorer"])
+    register = client.node.create_client(RegisterDemonstration, "/register_demonstration")
+    assert register.wait_for_service(timeout_sec=30)
+
+    def send(action, outcome):
+        demo = Demonstration(action=action, outcome=outcome)
+        return client.call(register, RegisterDemonstration.Request(demonstration=demo))
+
+    short = send([0.1] * 5, [0.0, 0.0])
+    assert not short.accepted and "24" in short.message
+    nan = send([0.1] * 24, [float("nan"), 0.0])
+    assert not nan.accepted and "NaN" in nan.message
+    outside = send([1.5] + [0.0] * 23, [0.0, 0.0])
+    assert not outside.accepted and "[-1, 1]" in outside.message
+
+    reach = ActionClient(client.node, ReachGoal, "/reach_goal")
+    assert reach.wait_for_server(timeout_sec=30)
+    sent = reach.send_goal_async(ReachGoal.Goal(goal=[1.5, 0.0], goal_index=1))
+    assert client.spin_until(sent.done)
+    result = sent.result().get_result_async()
+    assert client.spin_until(result.done)
+    assert result.result().status == GoalStatus.STATUS_ABORTED
+    # Still alive and well: a good demonstration is taken.
+    assert send([0.1] * 24, [0.2, -0.3]).accepted
+
+
+def test_interest_computer_ignores_records_outside_the_space(ros_processes, client):
+    from sgim_msgs.msg import Competence, RegionMap
+    from sgim_ros import qos
+
+    ros_processes.start("interest", [ROS2RUN, "sgim_nodes", "interest_computer"])
+    maps = client.capture(RegionMap, "/region_map", qos.LATEST_STATE)
+    publisher = client.node.create_publisher(Competence, "/competences", qos.RECORDS)
+    assert client.spin_until(lambda: maps and publisher.get_subscription_count() > 0)
+    publisher.publish(Competence(goal=[2.0, 0.0], competence=-0.5))
+    publisher.publish(Competence(goal=[0.1, 0.1], competence=0.5))  # competence must be <= 0
+    publisher.publish(Competence(goal=[0.1], competence=-0.5))
+    publisher.publish(Competence(goal=[0.1, 0.1], competence=-0.5))
+    assert client.spin_until(lambda: maps[-1].goal_count >= 1)
+    client.spin_for(0.5)
+    assert maps[-1].goal_count == 1  # only the good record was folded in
+
+
+def test_a_parameter_file_of_the_wrong_type_is_refused_by_name(ros_processes, tmp_path):
+    params = tmp_path / "bad.yaml"
+    params.write_text("/**:\n  ros__parameters:\n    zeta: twenty\n")
+    child = ros_processes.start(
+        "interest-bad-file",
+        [ROS2RUN, "sgim_nodes", "interest_computer", "--ros-args", "--params-file", str(params)],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    output, _ = child.communicate(timeout=60)
+    assert child.returncode == 2 and "zeta" in output and "int" in output, output
