@@ -19,3 +19,14 @@ def test_learner_yaml_holds_every_learner_default():
     # The run's own settings are the paper's.
     assert values["movements"] == 5000 and values["eval_every"] == 250
     assert values["demonstration_period"] == 150 and values["action_size"] == 24
+
+
+def test_node_parameter_files_hold_the_code_defaults():
+    from sim_bridge.fishing_world import DEFAULT_NOISE, DEFAULT_TIME_STEP
+    from teacher.teaching import PAPER_PERIOD
+
+    sim = yaml.safe_load((REPO / "sim_bridge" / "config" / "sim_bridge.yaml").read_text())
+    values = sim["sim_bridge"]["ros__parameters"]
+    assert values["noise"] == DEFAULT_NOISE and values["time_step"] == DEFAULT_TIME_STEP
+    teacher = yaml.safe_load((REPO / "teacher" / "config" / "teacher.yaml").read_text())
+    assert teacher["teacher"]["ros__parameters"]["demonstration_period"] == PAPER_PERIOD
