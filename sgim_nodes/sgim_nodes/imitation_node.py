@@ -16,15 +16,21 @@ service_timeout.
 
 from __future__ import annotations
 
-from rclpy.action import ActionServer, CancelResponse, GoalResponse
-
 from sgim_msgs.action import Imitate
 from sgim_msgs.msg import Movement
 from sgim_msgs.srv import ExecuteAction
 from sgim_nodes.core.environment import MovementResult
 from sgim_nodes.core.imitation import Imitation
 from sgim_nodes.core.random_streams import component_rng
-from sgim_nodes.ros_glue import AsyncNode, check_vector, declare_learner, floats, run_node, vec
+from sgim_nodes.ros_glue import (
+    AsyncNode,
+    JobServer,
+    check_vector,
+    declare_learner,
+    floats,
+    run_node,
+    vec,
+)
 from sgim_nodes.sim_client import RecentMovements, SimClient
 from sgim_ros import qos
 from sgim_ros.params import Param, positive
@@ -42,18 +48,7 @@ class ImitationNode(AsyncNode):
         recent = RecentMovements()
         self.create_subscription(Movement, "movements", recent.add, qos.RECORDS)
         self.sim = SimClient(self, values["service_timeout"], recent.recorded)
-        self.busy = False
-        self._server = ActionServer(
-            self, Imitate, "imitate", execute_callback=self._imitate,
-            goal_callback=lambda _: GoalResponse.REJECT if self.busy else GoalResponse.ACCEPT,
-            cancel_callback=lambda _: CancelResponse.ACCEPT)
-
-    async def _imitate(self, handle) -> Imitate.Result:
-        self.busy = True
-        try:
-            return await self._run(handle)
-        finally:
-            self.busy = False
+        self.jobs = JobServer(self, Imitate, "imitate", self._run)
 
     async def _run(self, handle) -> Imitate.Result:
         request: Imitate.Goal = handle.request
@@ -82,10 +77,6 @@ class ImitationNode(AsyncNode):
         result.movements_used = job.movements
         result.best_outcome = floats(job.best_outcome)
         result.best_distance = job.best_distance
-        if result.cancelled:
-            handle.canceled()
-        else:
-            handle.succeed()
         return result
 
 

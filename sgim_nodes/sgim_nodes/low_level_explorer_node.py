@@ -18,8 +18,6 @@ Parameters: the common ones and every LearnerConfig field; service_timeout.
 
 from __future__ import annotations
 
-from rclpy.action import ActionServer, CancelResponse, GoalResponse
-
 from sgim_msgs.action import ReachGoal
 from sgim_msgs.msg import Competence
 from sgim_msgs.srv import ExecuteAction, RegisterDemonstration
@@ -32,6 +30,7 @@ from sgim_nodes.resume import resume_point
 from sgim_nodes.ros_glue import (
     PROCESS_CODES,
     AsyncNode,
+    JobServer,
     check_vector,
     declare_learner,
     floats,
@@ -58,13 +57,9 @@ class LowLevelExplorer(AsyncNode):
             self.memory.resume(resume_point(values["resume_from"], self.config,
                                  values["resume_segments"]))
         self.sim = SimClient(self, values["service_timeout"], self.memory.recorded)
-        self.busy = False
         self._competences = self.create_publisher(Competence, "competences", qos.RECORDS)
         self.create_service(RegisterDemonstration, "register_demonstration", self._register)
-        self._server = ActionServer(
-            self, ReachGoal, "reach_goal", execute_callback=self._reach,
-            goal_callback=lambda _: GoalResponse.REJECT if self.busy else GoalResponse.ACCEPT,
-            cancel_callback=lambda _: CancelResponse.ACCEPT)
+        self.jobs = JobServer(self, ReachGoal, "reach_goal", self._attempt)
 
     def _register(self, request: RegisterDemonstration.Request,
                   response: RegisterDemonstration.Response):
@@ -74,13 +69,6 @@ class LowLevelExplorer(AsyncNode):
         if why:
             self.get_logger().error(f"refused demonstration {demo.index}: {why}")
         return response
-
-    async def _reach(self, handle) -> ReachGoal.Result:
-        self.busy = True
-        try:
-            return await self._attempt(handle)
-        finally:
-            self.busy = False
 
     async def _attempt(self, handle) -> ReachGoal.Result:
         request: ReachGoal.Goal = handle.request
@@ -123,10 +111,6 @@ class LowLevelExplorer(AsyncNode):
                 movement_index=request.movements_before + used, goal=floats(goal),
                 reached=result.reached, competence=result.competence, movements_used=used,
                 from_demonstration=False))
-        if result.cancelled:
-            handle.canceled()
-        else:
-            handle.succeed()
         return result
 
 

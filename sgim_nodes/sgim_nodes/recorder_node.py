@@ -27,8 +27,6 @@ import importlib
 import sys
 import time
 
-import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile
 from rclpy.serialization import deserialize_message
@@ -37,7 +35,8 @@ from sgim_msgs.msg import Movement, RunStatus
 from sgim_nodes.bag_types import STATE_TOPICS, TOPICS
 from sgim_nodes.bag_writer import STORAGES, BagWriteError, SplitBagWriter
 from sgim_ros import qos
-from sgim_ros.params import Param, ParameterError, declare, one_of, positive
+from sgim_ros.entry import run_node
+from sgim_ros.params import Param, declare, one_of, positive
 
 FINISH_LIMIT = 30.0  # seconds after the final status at which the recorder stops regardless
 PARAMS = (
@@ -183,6 +182,14 @@ class RecorderNode(Node):
         self.bag.close()
         self.get_logger().info(f"bag {self.bag.path} closed: {self.summary()}")
 
+    @property
+    def exit_code(self) -> int:
+        return 1 if self.errors else 0
+
+    def destroy_node(self) -> None:
+        self.close_bag()  # however the node ends: the open part becomes a finished file
+        super().destroy_node()
+
 
 def _usage() -> str:
     lines = [
@@ -205,26 +212,7 @@ def main(args: list[str] | None = None) -> int:
                                                 if "--ros-args" in argv else None]):
         print(_usage())
         return 0
-    rclpy.init(args=args)
-    try:
-        node = RecorderNode()
-    except (ParameterError, BagWriteError) as error:
-        print(f"recorder: {error}", file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
-    executor = SingleThreadedExecutor()
-    executor.add_node(node)
-    try:
-        while rclpy.ok() and not node.finished:
-            executor.spin_once(timeout_sec=0.1)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.close_bag()
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 1 if node.errors else 0
+    return run_node(RecorderNode, args, refusals=(BagWriteError,))
 
 
 if __name__ == "__main__":

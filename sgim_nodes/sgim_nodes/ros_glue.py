@@ -1,24 +1,23 @@
-"""What every learner node shares: message <-> numpy conversions, the learner parameters and
-the node entry point. Only translation lives here; the algorithms stay in `core`.
+"""What every learner node shares: message <-> numpy conversions, the learner parameters, the
+action server of movement-by-movement jobs. Only translation lives here; algorithms stay in
+`core`.
 """
 
 from __future__ import annotations
 
-import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import fields
 from typing import Any
 
 import numpy as np
-import rclpy
-from rclpy.callback_groups import ReentrantCallbackGroup
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.node import Node
 
 from sgim_msgs.msg import Movement, Region, RegionMap
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.learners import LEARNER_NAMES
 from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
+from sgim_ros.entry import AsyncNode, run_node  # noqa: F401 - the nodes' shared entry point
 from sgim_ros.params import Param, ParameterError, declare, one_of
 
 # Core process labels <-> Movement.PROCESS_* codes.
@@ -36,19 +35,35 @@ ACTION_SIZE = 24  # the fishing world's; a parameter of every node that checks s
 OUTCOME_SIZE = 2
 
 
-class AsyncNode(Node):
-    """A node whose callbacks may `await` (service calls, actions, timers, other messages).
+class JobServer:
+    """A long job driven movement by movement, served as a ROS 2 action, one at a time.
 
-    rclpy runs the callbacks of one mutually exclusive group one at a time, and a coroutine
-    that awaits keeps its group busy: with the default group, the reply it awaits could never
-    be processed (the deadlock noted in shared/notes/ros2-from-pypi.md). A reentrant default
-    group lets other callbacks run while one awaits; with the single-threaded executor they
-    still never run in parallel, they only interleave at `await` points.
+    A second goal is refused while a job runs (the arbiter sends one at a time); a cancel is
+    always accepted and the job honours it at its next movement boundary, then says so in its
+    result (`cancelled`). A job that refuses its request aborts the goal itself.
     """
 
-    def __init__(self, name: str, **kwargs: Any) -> None:
-        super().__init__(name, **kwargs)
-        self._default_callback_group = ReentrantCallbackGroup()
+    def __init__(self, node: Node, action_type: type, name: str,
+                 job: Callable[[Any], Awaitable[Any]]) -> None:
+        self.job = job
+        self.busy = False
+        self._server = ActionServer(
+            node, action_type, name, execute_callback=self._execute,
+            goal_callback=lambda _: GoalResponse.REJECT if self.busy else GoalResponse.ACCEPT,
+            cancel_callback=lambda _: CancelResponse.ACCEPT)
+
+    async def _execute(self, handle) -> Any:
+        self.busy = True
+        try:
+            result = await self.job(handle)
+        finally:
+            self.busy = False
+        if handle.is_active:
+            if result.cancelled:
+                handle.canceled()
+            else:
+                handle.succeed()
+        return result
 
 
 def vec(values: Sequence[float]) -> np.ndarray:
@@ -144,30 +159,3 @@ def snapshot_from_msg(msg: RegionMap) -> RegionSnapshot:
         msg.goal_count,
         msg.split_count,
     )
-
-
-def run_node(factory: Callable[[], Node], args: list[str] | None = None) -> int:
-    """Create and spin one node; a bad parameter ends it with exit code 2 and a clear message.
-
-    Ctrl-C and external shutdown end it cleanly; a node may also end the spin by itself by
-    setting `node.finished = True` (with `node.exit_code`).
-    """
-    rclpy.init(args=args)
-    try:
-        node = factory()
-    except (ParameterError, ValueError, FileNotFoundError) as error:
-        print(f"[{factory.__name__}] {error}", file=sys.stderr, flush=True)
-        rclpy.try_shutdown()
-        return 2
-    executor = SingleThreadedExecutor()
-    executor.add_node(node)
-    try:
-        while rclpy.ok() and not getattr(node, "finished", False):
-            executor.spin_once(timeout_sec=0.1)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return int(getattr(node, "exit_code", 0))

@@ -16,13 +16,13 @@ from __future__ import annotations
 import sys
 
 import numpy as np
-import rclpy
 from rclpy.node import Node
 
 from sgim_msgs.msg import Movement
 from sgim_msgs.srv import ExecuteAction
 from sgim_ros import qos
-from sgim_ros.params import Param, ParameterError, declare, non_negative
+from sgim_ros.entry import run_node
+from sgim_ros.params import Param, declare, non_negative
 from sim_bridge.fishing_world import DEFAULT_NOISE, DEFAULT_TIME_STEP, FishingWorld
 
 PARAMS = (
@@ -90,21 +90,7 @@ class SimBridgeNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    rclpy.init(args=args)
-    try:
-        node = SimBridgeNode()
-    except ParameterError as error:
-        print(f"sim_bridge: {error}", file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(SimBridgeNode, args)
 
 
 if __name__ == "__main__":
