@@ -70,7 +70,7 @@ class SocialInteraction(AsyncNode):
                   positive, "> 0"),
             Param("service_timeout", 30.0, "seconds before a simulator call is retried",
                   positive, "> 0"),
-            Param("settle_time", 1.0, "seconds of discovery settling before the start",
+            Param("settle_time", 2.0, "seconds of discovery settling before the start",
                   non_negative, ">= 0"),
         ))
         self.p = values
