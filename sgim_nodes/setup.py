@@ -33,6 +33,7 @@ setup(
             "recorder = sgim_nodes.recorder_node:main",
             "replay = sgim_nodes.replay:main",
             "rebuild = sgim_nodes.rebuild:main",
+            "analyze = sgim_nodes.analysis.cli:main",
         ],
     },
 )

@@ -41,9 +41,9 @@ def colour(learner: str, k: int) -> str:
     return COLOURS.get(learner, f"C{k % 10}")
 
 
-def _outline_isolated(ax: plt.Axes) -> None:
+def _outline_isolated(ax: plt.Axes, edge: str = "black") -> None:
     ax.add_patch(Circle(ISOLATED_REGION["centre"], ISOLATED_REGION["radius"], fill=False,
-                        edgecolor="black", linestyle="--", linewidth=1.0))
+                        edgecolor=edge, linestyle="--", linewidth=1.0))
 
 
 def _outcome_axes(ax: plt.Axes) -> None:
@@ -119,9 +119,9 @@ def plot_landings(study: Study, frames: Sequence[int], path: Path) -> Path:
                               fontsize=9)
     fig.suptitle("Where the hook landed (share of the frame's landings per bin, pooled over "
                  "seeds; dashed: isolated region)", fontsize=10)
-    fig.tight_layout(rect=(0, 0, 0.9, 0.96))
+    fig.tight_layout(rect=(0, 0, 0.88, 0.96))
     if mesh is not None:
-        fig.colorbar(mesh, cax=fig.add_axes((0.92, 0.15, 0.02, 0.7)), label="share of landings")
+        fig.colorbar(mesh, cax=fig.add_axes((0.9, 0.15, 0.02, 0.7)), label="share of landings")
     fig.savefig(path, dpi=DPI)
     plt.close(fig)
     return path
@@ -160,9 +160,10 @@ def plot_region_trees(study: Study, times: Sequence[int], path: Path, seed: int 
                                       linewidth=0.4)
             patches.set_array(interest)
             ax.add_collection(patches)
-            _outline_isolated(ax)
+            _outline_isolated(ax, edge="tab:cyan")  # visible on dark and light leaves
             _outcome_axes(ax)
-            ax.set_title(f"movement {t}\n(map at {at}, {len(boxes)} leaves)", fontsize=8)
+            leaves = f"{len(boxes)} lea{'f' if len(boxes) == 1 else 'ves'}"
+            ax.set_title(f"movement {t}\n(map at {at}, {leaves})", fontsize=8)
             if j == 0:
                 ax.set_ylabel(f"{run.learner} seed {run.seed}", fontsize=9)
     fig.suptitle("Interest tree: leaf regions coloured by interest (competence progress)",

@@ -1,0 +1,99 @@
+"""A tiny synthetic study written as real bags (rosbags, no ROS) with numbers known by hand.
+
+Layout as run_study.sh writes it: <study>/<learner>-seed<N>/bag/ and metadata.yaml.
+Each run has 20 movements, evaluations at 0, 10 and 20, and (for tree learners) region maps.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from tests.bag.samples import T, region, stamp, write_bag
+
+N_MOVES = 20
+EVAL_POINTS = (0, 10, 20)
+INSIDE = (-0.5, -0.25)  # the isolated region's centre
+OUTSIDE = (0.3, 0.1)
+
+# Final errors (evaluation at 20) per learner and seed, and the earlier points.
+FINALS = {"sgim-d": [0.20, 0.25, 0.30], "random": [0.50, 0.55, 0.65]}
+AT_10 = {"sgim-d": [0.40, 0.44, 0.42], "random": [0.60, 0.61, 0.62]}
+AT_0 = 0.9
+
+
+def movement(index: int, outcome, process: int = 0, status: int = 0):
+    return T["sgim_msgs/msg/Movement"](
+        stamp=stamp(index), index=index, process=process, status=status,
+        action=np.zeros(24), outcome=np.zeros(0) if outcome is None else np.asarray(outcome),
+        goal=np.zeros(2), goal_index=0)
+
+
+def evaluation(index: int, mean: float):
+    distances = np.array([mean - 0.1, mean + 0.1])
+    return T["sgim_msgs/msg/Evaluation"](
+        stamp=stamp(index), movement_index=index, mean_distance=mean, outcome_size=2,
+        goals=np.zeros(4), reached=np.zeros(4), distances=distances)
+
+
+def region_map(index: int, split: bool):
+    regions = [region(0, -1, [-1, -1], [1, 1], not split)]
+    if split:
+        regions += [region(1, 0, [-1, -1], [0, 1], True), region(2, 0, [0, -1], [1, 1], True)]
+    return T["sgim_msgs/msg/RegionMap"](stamp=stamp(index), movement_index=index,
+                                        split_count=int(split), goal_count=index,
+                                        regions=regions)
+
+
+def run_status(learner: str, seed: int, index: int, state: int):
+    return T["sgim_msgs/msg/RunStatus"](stamp=stamp(index), learner=learner, seed=seed,
+                                        movement_index=index, total_movements=N_MOVES,
+                                        state=state, message="")
+
+
+def run_messages(learner: str, seed: int, evals: dict[int, float],
+                 inside: dict[int, int] | None = None, failed: tuple[int, ...] = (7,),
+                 maps: bool = False) -> list[tuple[str, object]]:
+    """Movements 1..20 landing OUTSIDE except `inside` (index -> process) and `failed`."""
+    inside = inside or {}
+    out: list[tuple[str, object]] = [("run_status", run_status(learner, seed, 0, 0))]
+    if 0 in evals:
+        out.append(("evaluations", evaluation(0, evals[0])))
+    for i in range(1, N_MOVES + 1):
+        if i in failed:
+            out.append(("movements", movement(i, None, status=1)))
+        else:
+            out.append(("movements", movement(i, INSIDE if i in inside else OUTSIDE,
+                                              process=inside.get(i, 0))))
+        if maps and i % 10 == 0:
+            out.append(("region_map", region_map(i, split=i >= 20)))
+        if i in evals:
+            out.append(("evaluations", evaluation(i, evals[i])))
+    out.append(("run_status", run_status(learner, seed, N_MOVES, 1)))
+    return out
+
+
+def write_run(study: Path, learner: str, seed: int, messages: list[tuple[str, object]],
+              duration_s: float = 10.0, **writer_kwargs) -> Path:
+    run_dir = study / f"{learner}-seed{seed}"
+    run_dir.mkdir(parents=True)
+    write_bag(run_dir / "bag", messages, **writer_kwargs)
+    (run_dir / "metadata.yaml").write_text(yaml.safe_dump({
+        "learner": learner, "seed": seed, "movements": N_MOVES, "outcome": "finished",
+        "duration_s": duration_s}))
+    return run_dir
+
+
+def write_study(study: Path, seeds: int = 3, learners: tuple[str, ...] = ("sgim-d", "random")
+                ) -> Path:
+    """sgim-d seed 0 lands in the isolated region at 5 and 12 (own) and 9 (imitation)."""
+    for learner in learners:
+        for seed in range(seeds):
+            evals = {0: AT_0, 10: AT_10[learner][seed], 20: FINALS[learner][seed]}
+            inside = {5: 0, 9: 2, 12: 1} if (learner, seed) == ("sgim-d", 0) else {}
+            write_run(study, learner, seed,
+                      run_messages(learner, seed, evals, inside, maps=learner == "sgim-d"),
+                      duration_s=10.0 + seed)
+    return study

@@ -1,0 +1,95 @@
+"""`analyze STUDY_DIR` writes every figure and table, whatever the study's shape."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from synthetic_study import FINALS
+
+from sgim_nodes.analysis.cli import main
+
+FILES = ("error_curves.png", "landings.png", "region_tree.png", "results.md", "results.json")
+
+
+def _png(path: Path) -> bool:
+    return path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_cli_writes_every_file(study: Path, tmp_path: Path, capsys: pytest.CaptureFixture
+                               ) -> None:
+    out = tmp_path / "out"
+    assert main([str(study), "--out", str(out), "--times", "5", "10", "20"]) == 0
+    for name in FILES:
+        assert (out / name).stat().st_size > 0, name
+    assert all(_png(out / n) for n in FILES if n.endswith(".png"))
+    assert str(out) in capsys.readouterr().out  # tells the user where the files are
+    results = json.loads((out / "results.json").read_text())
+    assert results["final_errors"]["sgim-d"]["values"] == pytest.approx(FINALS["sgim-d"])
+    assert results["final_errors"]["sgim-d"]["mean"] == pytest.approx(0.25)
+    assert results["tests"][0]["welch_p"] is not None
+    assert results["isolated_coverage"]["sgim-d"]["runs_reached"] == 1
+    assert results["runs"]["sgim-d"]["total_duration_s"] == pytest.approx(33.0)
+    assert results["curves"]["random"]["movements"] == [0, 10, 20]
+    md = (out / "results.md").read_text()
+    for heading in ("## Runs", "## Final error", "## Pairwise tests", "## Isolated region"):
+        assert heading in md
+    assert "| sgim-d | 3 | 20 | 0.250 |" in md
+
+
+def test_default_output_folder_and_times(study: Path) -> None:
+    assert main([str(study)]) == 0
+    assert all((study / "analysis" / name).exists() for name in FILES)
+    assert json.loads((study / "analysis" / "results.json").read_text())["skipped"] == {}
+
+
+def test_one_seed_study_reports_tests_as_not_applicable(make_study, tmp_path: Path) -> None:
+    study = make_study("one", seeds=1)
+    out = tmp_path / "out1"
+    assert main([str(study), "--out", str(out)]) == 0
+    results = json.loads((out / "results.json").read_text())
+    [test] = results["tests"]
+    assert test["applicable"] is False and test["welch_p"] is None
+    assert results["final_errors"]["random"]["low"] is None
+    assert results["final_errors"]["random"]["mean"] == pytest.approx(FINALS["random"][0])
+    assert "| n/a |" in (out / "results.md").read_text()
+    assert all((out / name).exists() for name in FILES)
+
+
+def test_a_single_learner_without_tree(make_study, tmp_path: Path) -> None:
+    study = make_study("random_only", seeds=2, learners=("random",))
+    out = tmp_path / "out2"
+    assert main([str(study), "--out", str(out)]) == 0
+    results = json.loads((out / "results.json").read_text())
+    assert results["tests"] == [] and list(results["final_errors"]) == ["random"]
+    assert not (out / "region_tree.png").exists()  # random builds no interest tree
+    assert "region_tree" not in results["figures"]
+
+
+def test_a_corrupted_bag_is_reported_and_skipped(study: Path, tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture) -> None:
+    for part in (study / "random-seed1" / "bag").glob("*.mcap"):
+        part.write_bytes(b"\0" * 64)
+    out = tmp_path / "out3"
+    assert main([str(study), "--out", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert "random-seed1" in captured.err and "warning" in captured.err
+    assert "Skipped 1 run(s): random-seed1" in captured.out
+    results = json.loads((out / "results.json").read_text())
+    assert "random-seed1" in results["skipped"]
+    assert results["final_errors"]["random"]["seeds"] == [0, 2]
+    assert "random-seed1" in (out / "results.md").read_text()
+
+
+def test_empty_or_missing_folder_fails_cleanly(tmp_path: Path) -> None:
+    assert main([str(tmp_path)]) == 2
+    assert main([str(tmp_path / "missing")]) == 2
+
+
+def test_help_describes_the_outputs(capsys: pytest.CaptureFixture) -> None:
+    with pytest.raises(SystemExit) as done:
+        main(["--help"])
+    assert done.value.code == 0
+    text = capsys.readouterr().out
+    assert all(name in text for name in FILES)

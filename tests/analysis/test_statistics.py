@@ -1,0 +1,93 @@
+"""The study's numbers against values computed by hand (and p-values straight from scipy)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+from scipy import stats
+from synthetic_study import AT_0, AT_10, FINALS
+
+from sgim_nodes.analysis.statistics import (
+    compare,
+    error_curves,
+    final_errors,
+    isolated_coverage,
+    mean_ci,
+    pairwise_tests,
+    run_summaries,
+)
+from sgim_nodes.analysis.study import load_study
+
+T_975_DF2 = 4.302652729911275  # Student's t, 97.5 % quantile, 2 degrees of freedom (tables)
+
+
+def test_mean_ci_by_hand() -> None:
+    ci = mean_ci([0.20, 0.25, 0.30])  # sd = 0.05
+    half = T_975_DF2 * 0.05 / math.sqrt(3)
+    assert ci.mean == pytest.approx(0.25) and ci.n == 3
+    assert ci.low == pytest.approx(0.25 - half) and ci.high == pytest.approx(0.25 + half)
+    assert ci.half_width == pytest.approx(half)
+
+
+def test_mean_ci_with_one_or_no_value_has_no_interval() -> None:
+    one = mean_ci([0.3])
+    assert one.mean == pytest.approx(0.3) and one.low is None and one.high is None
+    assert one.half_width is None
+    assert mean_ci([]).mean is None and mean_ci([float("nan")]).n == 0
+
+
+def test_error_curves_at_every_evaluation_point(study: Path) -> None:
+    curves = error_curves(load_study(study))
+    c = curves["sgim-d"]
+    assert c.movements.tolist() == [0, 10, 20]
+    assert c.mean.tolist() == pytest.approx([AT_0, 0.42, 0.25])
+    assert c.n.tolist() == [3, 3, 3]
+    half_10 = T_975_DF2 * 0.02 / math.sqrt(3)  # AT_10 sgim-d: 0.40, 0.44, 0.42 -> sd 0.02
+    assert c.low[1] == pytest.approx(0.42 - half_10) and c.high[1] == pytest.approx(0.42 + half_10)
+    assert c.low[0] == pytest.approx(AT_0) and c.high[0] == pytest.approx(AT_0)  # no spread
+    assert curves["random"].mean[1] == pytest.approx(sum(AT_10["random"]) / 3)
+
+
+def test_final_errors_and_pairwise_tests_match_scipy(study: Path) -> None:
+    finals = final_errors(load_study(study))
+    assert finals["sgim-d"].values == pytest.approx(FINALS["sgim-d"])
+    assert finals["random"].interval.mean == pytest.approx(0.5666666666)
+    assert finals["sgim-d"].movements == [20, 20, 20]
+    [test] = pairwise_tests(finals)
+    welch = stats.ttest_ind(FINALS["sgim-d"], FINALS["random"], equal_var=False)
+    mwu = stats.mannwhitneyu(FINALS["sgim-d"], FINALS["random"], alternative="two-sided")
+    assert (test.a, test.b, test.closer) == ("sgim-d", "random", "sgim-d")
+    assert test.mean_difference == pytest.approx(0.25 - 0.5666666666)
+    assert test.welch_p == pytest.approx(welch.pvalue) and test.welch_t == pytest.approx(
+        welch.statistic)
+    assert test.mann_whitney_u == 0.0 and test.mann_whitney_p == pytest.approx(mwu.pvalue)
+    assert test.mann_whitney_p == pytest.approx(0.1)  # 2 / C(6, 3): complete separation
+    assert test.applicable and not test.significant  # MW cannot go below 0.1 with 3 vs 3
+
+
+def test_tests_are_not_applicable_with_one_run() -> None:
+    t = compare("a", [0.2], "b", [0.4, 0.5])
+    assert not t.applicable and t.welch_p is None and t.mann_whitney_p is None
+    assert t.closer == "a" and t.mean_difference == pytest.approx(-0.25)
+
+
+def test_isolated_region_coverage_counts(study: Path) -> None:
+    coverage = isolated_coverage(load_study(study))
+    sgim = coverage["sgim-d"]
+    first = sgim.runs[0]
+    assert (first.outcomes, first.in_region, first.own_in_region) == (19, 3, 2)
+    assert first.first_movement == 5 and first.share == pytest.approx(3 / 19)
+    assert [r.in_region for r in sgim.runs] == [3, 0, 0]
+    assert sgim.runs_reached == 1 and sgim.first_movement_median == 5
+    assert sgim.share.mean == pytest.approx(1 / 19)
+    assert coverage["random"].runs_reached == 0
+    assert coverage["random"].first_movement_median is None
+
+
+def test_run_summaries_from_metadata(study: Path) -> None:
+    summary = run_summaries(load_study(study))["random"]
+    assert (summary.runs, summary.finished, summary.seeds) == (3, 3, [0, 1, 2])
+    assert summary.total_duration_s == pytest.approx(33.0)
+    assert summary.mean_duration_s == pytest.approx(11.0)
