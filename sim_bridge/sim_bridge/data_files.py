@@ -8,7 +8,11 @@ is needed.
 
 The isolated region (the pond cut off by land, ``lake.py``) is re-exported here so the analysis can
 measure each learner's coverage of it: ``ISOLATED_REGION = {"centre": (-0.5, -0.25), "radius":
-0.112}`` in normalised outcome units, and ``in_isolated_region(outcomes)``.
+0.112}`` in normalised outcome units, and ``in_isolated_region(outcomes)``. For a world with
+another pond (``lake.Lake(pond_radius=...)``), ``isolated_region(lake)`` and
+``lake.in_isolated_region(outcomes)``; ``load_reachable_casts(..., lake=lake)`` keeps only the
+mapped casts that land on that lake's water (a smaller pond's landings are a subset of the
+default pond's, the physics being the same).
 """
 
 from __future__ import annotations
@@ -19,9 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
-from sim_bridge.lake import ISOLATED_REGION, in_isolated_region
+from sim_bridge import scaling
+from sim_bridge.lake import ISOLATED_REGION, Lake, in_isolated_region, isolated_region
 
-__all__ = ["ISOLATED_REGION", "ReachableMap", "TeachingSet", "data_dir", "in_isolated_region",
+__all__ = ["ISOLATED_REGION", "Lake", "ReachableMap", "TeachingSet", "data_dir",
+           "in_isolated_region", "isolated_region",
            "load_benchmark_goals", "load_reachable_casts", "load_reachable_map",
            "load_teaching_set"]
 
@@ -68,15 +74,26 @@ class ReachableMap:
     outcomes: np.ndarray  # (N, 2) float32, normalised
 
 
-def load_reachable_map(path: str | os.PathLike[str] | None = None) -> np.ndarray:
-    """Reached outcomes (N, 2) of the mapping run."""
-    return load_reachable_casts(path).outcomes
+def load_reachable_map(path: str | os.PathLike[str] | None = None,
+                       lake: Lake | None = None) -> np.ndarray:
+    """Reached outcomes (N, 2) of the mapping run (with ``lake``: on its water only)."""
+    return load_reachable_casts(path, lake).outcomes
 
 
-def load_reachable_casts(path: str | os.PathLike[str] | None = None) -> ReachableMap:
-    """Actions and outcomes of the mapping run."""
+def load_reachable_casts(path: str | os.PathLike[str] | None = None,
+                         lake: Lake | None = None) -> ReachableMap:
+    """Actions and outcomes of the mapping run; with ``lake``, only its water landings.
+
+    The map was recorded in the default world; the physics does not depend on the lake, so in a
+    world whose water is a subset of the default's (a smaller pond) a mapped cast is a landing
+    there exactly when its outcome lies on that world's water.
+    """
     with np.load(_path(REACHABLE_MAP, path)) as f:
-        return ReachableMap(actions=f["actions"], outcomes=f["outcomes"])
+        m = ReachableMap(actions=f["actions"], outcomes=f["outcomes"])
+    if lake is None:
+        return m
+    keep = lake.is_water(scaling.outcome_to_world(m.outcomes.astype(np.float64)))
+    return ReachableMap(actions=m.actions[keep], outcomes=m.outcomes[keep])
 
 
 def load_benchmark_goals(path: str | os.PathLike[str] | None = None) -> np.ndarray:

@@ -12,8 +12,9 @@ Why this design (details and measured figures in ``sim_bridge/README_world.md``)
   linearly inside the step (attached phase) or solved exactly (free flight): cheaper and more
   precise than contact detection, so the model has no collision shapes at all.
 - The hook must land on water: the water is a reservoir with a shoreline (``lake.py``: a main
-  basin with four arms, and a small pond cut off by land). A hook whose first touch-down is on land
-  gives status NO_CONTACT with the message "landed on land at (x, y)", never an outcome.
+  basin with four arms, and a small pond cut off by land; ``FishingWorld(lake=Lake(pond_radius=
+  ...))`` makes the pond smaller, ``docs/isolated_region.md``). A hook whose first touch-down is
+  on land gives status NO_CONTACT with the message "landed on land at (x, y)", never an outcome.
 - Noise is added to the motor commands (Bezier points and durations), drawn from the world's own
   generator: the same seed and the same sequence of actions give bit-identical outcomes.
 """
@@ -29,7 +30,8 @@ from enum import IntEnum
 import numpy as np
 import pybullet as pb
 
-from sim_bridge import lake, scaling
+from sim_bridge import lake as lake_mod
+from sim_bridge import scaling
 from sim_bridge.bezier import joint_trajectory
 from sim_bridge.rod_urdf import XARM6_JOINTS, RodSpec, build_urdf
 
@@ -132,7 +134,8 @@ class FishingWorld:
     outcome_dim = scaling.OUTCOME_DIM
 
     def __init__(self, seed: int = 0, noise: float = DEFAULT_NOISE,
-                 time_step: float = DEFAULT_TIME_STEP, rod: RodSpec | None = None) -> None:
+                 time_step: float = DEFAULT_TIME_STEP, rod: RodSpec | None = None,
+                 lake: lake_mod.Lake | None = None) -> None:
         if noise < 0.0 or not math.isfinite(noise):
             raise ValueError("noise must be a finite number >= 0")
         if not 0.0 < time_step <= 0.01:
@@ -140,6 +143,9 @@ class FishingWorld:
         self.seed = int(seed)
         self.noise = float(noise)
         self.time_step = float(time_step)
+        # The water's shapes; the default keeps the documented world (README_world.md). Only
+        # the test "water or land" depends on it, never the physics.
+        self.lake = lake if lake is not None else lake_mod.DEFAULT_LAKE
         self.rng = np.random.Generator(np.random.PCG64(self.seed))
         self._client = pb.connect(pb.DIRECT)
         self._build(rod or RodSpec())
@@ -284,10 +290,9 @@ class FishingWorld:
                               message="the hook did not reach the water within the time limit")
         return self._landed(hit[1], t_rel + hit[0], t_rel)
 
-    @staticmethod
-    def _landed(xy: np.ndarray, t_touch: float, t_rel: float) -> CastResult:
+    def _landed(self, xy: np.ndarray, t_touch: float, t_rel: float) -> CastResult:
         u = scaling.world_to_outcome(xy)
-        if not lake.is_water(xy):
+        if not self.lake.is_water(xy):
             return CastResult(status=Status.NO_CONTACT, world_point=xy, touchdown=u,
                               touch_time=t_touch,
                               release_time=t_rel,

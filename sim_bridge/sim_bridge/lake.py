@@ -62,28 +62,19 @@ def _in_polygon(xy: np.ndarray, poly: np.ndarray) -> np.ndarray:
     return inside
 
 
-def _in_pond(xy: np.ndarray) -> np.ndarray:
-    cx, cy, r = POND
+def _in_disc(xy: np.ndarray, cx: float, cy: float, r: float) -> np.ndarray:
     return (xy[..., 0] - cx) ** 2 + (xy[..., 1] - cy) ** 2 <= r * r
 
 
-def water_body(xy: np.ndarray) -> np.ndarray:
-    """LAND, MAIN_LAKE or ISOLATED_POND for world points (..., 2) in metres."""
-    xy = np.asarray(xy, dtype=float)
+def _in_main_lake(xy: np.ndarray) -> np.ndarray:
     main = _in_ellipse(xy, BASIN)
     for poly in ARMS.values():
         main |= _in_polygon(xy, poly)
-    out = np.where(main, MAIN_LAKE, LAND)
-    return np.where(_in_pond(xy), ISOLATED_POND, out)
-
-
-def is_water(xy: np.ndarray) -> np.ndarray:
-    """True where world points (..., 2) lie on water."""
-    return water_body(xy) != LAND
+    return main
 
 
 def water_bounding_box() -> np.ndarray:
-    """[x_min, x_max, y_min, y_max] of the union of the water shapes (equals OUTCOME_BOX)."""
+    """[x_min, x_max, y_min, y_max] of the union of the default water shapes (= OUTCOME_BOX)."""
     cx, cy, a, b = BASIN
     px, py, r = POND
     pts = np.vstack([*ARMS.values(), [(cx - a, cy - b), (cx + a, cy + b)],
@@ -91,31 +82,112 @@ def water_bounding_box() -> np.ndarray:
     return np.array([pts[:, 0].min(), pts[:, 0].max(), pts[:, 1].min(), pts[:, 1].max()])
 
 
-def _isolated_region() -> tuple[np.ndarray, float]:
-    box = scaling.OUTCOME_BOX
-    centre = scaling.world_to_outcome(np.array(POND[:2]))
-    scale = 2.0 / np.array([box[1] - box[0], box[3] - box[2]])
-    # The box is square, so the pond is a circle in normalised units too.
-    return centre, float(POND[2] * scale.max())
+class Lake:
+    """The water of one world: the fixed main lake (basin and arms) and an isolated pond.
+
+    Why a parameter: how rarely random actions reach the pond (its isolation in action space)
+    is set by the pond's size and place; ``Lake()`` is the default world (``POND``), and
+    ``Lake(pond_radius=0.3)`` a world whose pond is smaller but at the same place, so the main
+    lake, the outcome map (``scaling.OUTCOME_BOX``) and every stored data file stay valid for
+    it. A pond may be moved (``pond_centre``) but must stay inside the outcome box and apart
+    from the main lake (at least ``MIN_LAND`` metres of land); otherwise ``ValueError``.
+    """
+
+    MIN_LAND = 0.3  # m: the least land between the pond and the main lake
+
+    def __init__(self, pond_radius: float = POND[2],
+                 pond_centre: tuple[float, float] = (POND[0], POND[1])) -> None:
+        r, (cx, cy) = float(pond_radius), (float(pond_centre[0]), float(pond_centre[1]))
+        if not (np.isfinite(r) and r > 0.0 and np.isfinite(cx) and np.isfinite(cy)):
+            raise ValueError("pond_radius must be a finite number > 0 and its centre finite")
+        box = scaling.OUTCOME_BOX
+        if cx - r < box[0] or cx + r > box[1] or cy - r < box[2] or cy + r > box[3]:
+            raise ValueError(f"the pond must lie inside the outcome box {list(box)}")
+        self.pond = (cx, cy, r)
+        t = np.linspace(0.0, 2.0 * np.pi, 720, endpoint=False)
+        disc = np.concatenate([np.c_[cx + d * np.cos(t), cy + d * np.sin(t)]
+                               for d in np.linspace(0.0, r + self.MIN_LAND, 24)])
+        if np.any(_in_main_lake(disc)):
+            raise ValueError(f"the pond must be at least {self.MIN_LAND} m of land away from "
+                             "the main lake")
+
+    def __repr__(self) -> str:
+        cx, cy, r = self.pond
+        return f"Lake(pond_radius={r!r}, pond_centre=({cx!r}, {cy!r}))"
+
+    @property
+    def is_default(self) -> bool:
+        return self.pond == POND
+
+    def water_body(self, xy: np.ndarray) -> np.ndarray:
+        """LAND, MAIN_LAKE or ISOLATED_POND for world points (..., 2) in metres."""
+        xy = np.asarray(xy, dtype=float)
+        out = np.where(_in_main_lake(xy), MAIN_LAKE, LAND)
+        return np.where(_in_disc(xy, *self.pond), ISOLATED_POND, out)
+
+    def is_water(self, xy: np.ndarray) -> np.ndarray:
+        """True where world points (..., 2) lie on water."""
+        return self.water_body(xy) != LAND
+
+    def isolated_centre_radius(self) -> tuple[np.ndarray, float]:
+        """The pond in normalised outcome units: centre (2,) and radius."""
+        box = scaling.OUTCOME_BOX
+        centre = scaling.world_to_outcome(np.array(self.pond[:2]))
+        scale = 2.0 / np.array([box[1] - box[0], box[3] - box[2]])
+        # The box is square, so the pond is a circle in normalised units too.
+        return centre, float(self.pond[2] * scale.max())
+
+    def isolated_region(self) -> dict[str, object]:
+        """``{"centre": (x, y), "radius": r}`` of the pond, normalised outcome units."""
+        centre, radius = self.isolated_centre_radius()
+        return {"centre": tuple(float(v) for v in centre), "radius": radius}
+
+    def in_isolated_region(self, outcomes: np.ndarray, margin: float = 0.0) -> np.ndarray:
+        """True for normalised outcomes (..., 2) within the pond's radius + ``margin``."""
+        centre, radius = self.isolated_centre_radius()
+        u = np.asarray(outcomes, dtype=float)
+        return np.linalg.norm(u - centre, axis=-1) <= radius + margin
+
+
+DEFAULT_LAKE = Lake()
+
+
+def lake_with_pond_radius(pond_radius: float | None) -> Lake:
+    """The default lake, or one whose pond (same centre) has this radius in metres."""
+    return DEFAULT_LAKE if pond_radius is None else Lake(pond_radius=pond_radius)
+
+
+def isolated_region(lake: Lake | None = None) -> dict[str, object]:
+    """The isolated region (normalised units) of ``lake`` (default: the default lake)."""
+    return (lake or DEFAULT_LAKE).isolated_region()
+
+
+def water_body(xy: np.ndarray) -> np.ndarray:
+    """LAND, MAIN_LAKE or ISOLATED_POND for world points (..., 2) in metres (default lake)."""
+    return DEFAULT_LAKE.water_body(xy)
+
+
+def is_water(xy: np.ndarray) -> np.ndarray:
+    """True where world points (..., 2) lie on water (default lake)."""
+    return DEFAULT_LAKE.is_water(xy)
 
 
 # The isolated region in normalised outcome units: centre (-0.5, -0.25), radius 0.112 (the pond).
-ISOLATED_CENTRE, ISOLATED_RADIUS = _isolated_region()
-ISOLATED_REGION = {"centre": tuple(float(v) for v in ISOLATED_CENTRE),
-                   "radius": ISOLATED_RADIUS}
+ISOLATED_CENTRE, ISOLATED_RADIUS = DEFAULT_LAKE.isolated_centre_radius()
+ISOLATED_REGION = isolated_region()
 
 
 def in_isolated_region(outcomes: np.ndarray, margin: float = 0.0) -> np.ndarray:
     """True for normalised outcomes (..., 2) within ``ISOLATED_RADIUS + margin`` of its centre."""
-    u = np.asarray(outcomes, dtype=float)
-    return np.linalg.norm(u - ISOLATED_CENTRE, axis=-1) <= ISOLATED_RADIUS + margin
+    return DEFAULT_LAKE.in_isolated_region(outcomes, margin)
 
 
-
-def draw_shoreline(ax: object, resolution: int = 400, **kw: object) -> None:
+def draw_shoreline(ax: object, resolution: int = 400, lake: Lake | None = None,
+                   **kw: object) -> None:
     """Draw the shoreline (the water's edge, normalised units) on a matplotlib axis."""
     g = np.linspace(-1.0, 1.0, resolution)
     ux, uy = np.meshgrid(g, g)
-    wet = is_water(scaling.outcome_to_world(np.stack([ux, uy], axis=-1))).astype(float)
+    world = scaling.outcome_to_world(np.stack([ux, uy], axis=-1))
+    wet = (lake or DEFAULT_LAKE).is_water(world).astype(float)
     style = {"colors": "tab:red", "linewidths": 0.8} | kw
     ax.contour(ux, uy, wet, levels=[0.5], **style)  # type: ignore[attr-defined]

@@ -43,13 +43,18 @@ class World:
 
 
 def build_world(name: str, seed: int, noise: float | None = None, arm_joints: int = 12,
-                arm_cells: int = 12) -> World:
+                arm_cells: int = 12, pond_radius: float | None = None) -> World:
     """Training world, a separate evaluation world, benchmark goals and the teaching set.
 
     The fishing world and its data files are imported lazily: the planar-arm path needs none
     of them.  The evaluation world gets its own seed so its noise stream is independent.
+    ``pond_radius`` (fishing only, metres): a world whose isolated pond is smaller
+    (``sim_bridge.lake.Lake``); None keeps the world's default.  Its benchmark and teaching sets
+    are read from the data directory as usual (point SIM_BRIDGE_DATA_DIR at sets built for it).
     """
     if name == "planar-arm":
+        if pond_radius is not None:
+            raise ValueError("pond_radius applies to the fishing world only")
         kw = {} if noise is None else {"noise": noise}
         env = PlanarArm(n_joints=arm_joints, seed=seed, **kw)
         eval_env = PlanarArm(n_joints=arm_joints, seed=seed + EVALUATION_SEED_OFFSET, **kw)
@@ -59,8 +64,11 @@ def build_world(name: str, seed: int, noise: float | None = None, arm_joints: in
     if name == "fishing":
         from sim_bridge.data_files import load_benchmark_goals, load_teaching_set
         from sim_bridge.fishing_world import FishingWorld
+        from sim_bridge.lake import lake_with_pond_radius
 
-        kw = {} if noise is None else {"noise": noise}
+        kw: dict[str, Any] = {} if noise is None else {"noise": noise}
+        if pond_radius is not None:
+            kw["lake"] = lake_with_pond_radius(pond_radius)
         ts = load_teaching_set()
         eval_world = FishingWorld(seed=seed + EVALUATION_SEED_OFFSET, **kw)
         return World(FishingWorld(seed=seed, **kw), eval_world,
@@ -139,6 +147,9 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--output", type=Path, required=True, help="JSON-lines file to write")
     p.add_argument("--noise", type=float, default=None,
                    help="outcome noise of the world (default: the world's own default)")
+    p.add_argument("--pond-radius", type=float, default=None,
+                   help="fishing: radius in metres of the isolated pond (default: the world's "
+                        "own, 0.95); benchmark and teaching sets come from SIM_BRIDGE_DATA_DIR")
     p.add_argument("--arm-joints", type=int, default=12,
                    help="planar arm: number of joints (default: %(default)s)")
     p.add_argument("--teacher-period", type=int, default=150,
@@ -149,6 +160,8 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         p.error("--movements must be >= 0")
     if args.eval_every < 0:
         p.error("--eval-every must be >= 0")
+    if args.pond_radius is not None and args.env != "fishing":
+        p.error("--pond-radius needs --env fishing")
     return args
 
 
@@ -157,7 +170,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     from tqdm import tqdm
 
     try:
-        world = build_world(args.env, args.seed, args.noise, args.arm_joints)
+        world = build_world(args.env, args.seed, args.noise, args.arm_joints,
+                            pond_radius=args.pond_radius)
     except ImportError as e:  # the fishing world lives in sim_bridge (another package)
         print(f"error: --env {args.env} needs {e.name}: {e}", file=sys.stderr)
         return 2
@@ -174,7 +188,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         write({"type": "header", "learner": args.learner, "env": args.env, "seed": args.seed,
                "movements": args.movements, "eval_every": args.eval_every,
-               "noise": args.noise, "action_dim": world.env.action_dim,
+               "noise": args.noise, **({} if args.pond_radius is None
+                                       else {"pond_radius": args.pond_radius}),
+               "action_dim": world.env.action_dim,
                "outcome_dim": world.env.outcome_dim, "n_goals": len(world.goals),
                "config": config.to_dict()})
         means = run(learner, world, args.movements, args.eval_every, args.seed, write,

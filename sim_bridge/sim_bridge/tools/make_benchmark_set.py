@@ -5,6 +5,9 @@ Why from the saved map: the set is a pure function of the reachable map and the 
 can regenerate the stored file exactly (a test does).
 
     python -m sim_bridge.tools.make_benchmark_set --seed 0
+
+``--pond-radius R`` (metres): the goals of a world whose pond is smaller (``lake.Lake``), from
+the stored map's casts that land on that world's water.
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ import numpy as np
 from tqdm import tqdm
 
 from sim_bridge.data_files import load_reachable_map
+from sim_bridge.lake import lake_with_pond_radius
 
 GRID = (26, 16)
 
@@ -38,10 +42,15 @@ def main(argv: list[str] | None = None) -> None:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--reachable", default=None, help="map .npz (default: the stored one)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the goal draws")
+    parser.add_argument("--pond-radius", type=float, default=None,
+                        help="radius (m) of the isolated pond of the world (default: 0.95)")
     parser.add_argument("--output", default="sim_bridge/data/benchmark_goals.npz")
     args = parser.parse_args(argv)
-    goals = benchmark_goals(load_reachable_map(args.reachable), args.seed, progress=True)
-    np.savez_compressed(args.output, goals=goals, seed=args.seed, grid=np.array(GRID))
+    lake = lake_with_pond_radius(args.pond_radius)
+    reached = load_reachable_map(args.reachable, lake=None if lake.is_default else lake)
+    goals = benchmark_goals(reached, args.seed, progress=True)
+    extra = {} if lake.is_default else {"pond_radius": lake.pond[2]}
+    np.savez_compressed(args.output, goals=goals, seed=args.seed, grid=np.array(GRID), **extra)
     print(f"{len(goals)} benchmark goals -> {args.output}")
 
 

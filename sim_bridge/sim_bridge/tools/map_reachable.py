@@ -11,6 +11,9 @@ casts that land on land or never reach the water are counted, not saved.
 Saves the landed casts (actions and normalised outcomes, float32) as a compressed .npz and a PNG.
 
     python -m sim_bridge.tools.map_reachable --random 10000 --spread 5000 --pond 800 --seed 0
+
+``--pond-radius R`` (metres) maps a world whose isolated pond is smaller (``lake.Lake``); its
+random phase may then find no pond landing (the pond phase then stops with an error).
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ import numpy as np
 from tqdm import tqdm
 
 from sim_bridge.fishing_world import FishingWorld, Status
-from sim_bridge.lake import in_isolated_region
+from sim_bridge.lake import DEFAULT_LAKE, Lake, lake_with_pond_radius
 
 GRID = (26, 16)
 
@@ -61,11 +64,12 @@ class _Mapper:
 
 
 def run_mapping(n_random: int, n_spread: int, seed: int, sigma: float = 0.05,
-                n_pond: int = 0, pond_sigma: float = 0.01, progress: bool = True
-                ) -> tuple[np.ndarray, np.ndarray, dict[str, int]]:
+                n_pond: int = 0, pond_sigma: float = 0.01, progress: bool = True,
+                lake: Lake = DEFAULT_LAKE) -> tuple[np.ndarray, np.ndarray, dict[str, int]]:
     """Actions (N, 24), outcomes (N, 2) of every water landing, and counts of each phase."""
     rng = np.random.default_rng(seed)
-    world = FishingWorld(seed=seed)
+    world = FishingWorld(seed=seed, lake=lake)
+    in_isolated_region = lake.in_isolated_region
     bar = tqdm(total=n_random + n_spread + n_pond, desc="casts", disable=not progress)
     m = _Mapper(world, bar)
     for a in rng.uniform(-1, 1, (n_random, world.action_dim)):
@@ -100,7 +104,7 @@ def run_mapping(n_random: int, n_spread: int, seed: int, sigma: float = 0.05,
     return np.array(m.actions, dtype=np.float32), outcomes, stats
 
 
-def save_png(outcomes: np.ndarray, path: Path, title: str) -> None:
+def save_png(outcomes: np.ndarray, path: Path, title: str, lake: Lake = DEFAULT_LAKE) -> None:
     """Scatter of the reached outcomes, the isolated pond's in orange, and the shoreline."""
     import matplotlib
     matplotlib.use("Agg")
@@ -108,11 +112,11 @@ def save_png(outcomes: np.ndarray, path: Path, title: str) -> None:
 
     from sim_bridge.lake import draw_shoreline
     fig, ax = plt.subplots(figsize=(6, 5.6))
-    pond = in_isolated_region(outcomes)
+    pond = lake.in_isolated_region(outcomes)
     ax.scatter(outcomes[~pond, 0], outcomes[~pond, 1], s=1, alpha=0.3, label="main lake")
     ax.scatter(outcomes[pond, 0], outcomes[pond, 1], s=1, alpha=0.5, color="tab:orange",
                label="isolated pond")
-    draw_shoreline(ax)
+    draw_shoreline(ax, lake=lake)
     ax.set(xlim=(-1, 1), ylim=(-1, 1), aspect="equal", xlabel="outcome x (normalised)",
            ylabel="outcome y (normalised)", title=title)
     ax.legend(loc="upper right", fontsize=7, markerscale=6)
@@ -132,15 +136,20 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--pond-sigma", type=float, default=0.01,
                         help="perturbation std of the pond search (action units)")
     parser.add_argument("--seed", type=int, default=0, help="seed of actions and world noise")
+    parser.add_argument("--pond-radius", type=float, default=None,
+                        help="radius (m) of the isolated pond of the world (default: 0.95)")
     parser.add_argument("--output", default="sim_bridge/data/reachable_map.npz")
     parser.add_argument("--png", default="docs/figures/sim_reachable_map.png")
     args = parser.parse_args(argv)
+    lake = lake_with_pond_radius(args.pond_radius)
     actions, outcomes, stats = run_mapping(args.random, args.spread, args.seed, args.sigma,
-                                           args.pond, args.pond_sigma)
+                                           args.pond, args.pond_sigma, lake=lake)
+    extra = {} if lake.is_default else {"pond_radius": lake.pond[2]}
     np.savez_compressed(args.output, actions=actions, outcomes=outcomes, seed=args.seed,
                         n_random=args.random, n_spread=args.spread, n_pond=args.pond,
-                        sigma=args.sigma, pond_sigma=args.pond_sigma)
-    save_png(outcomes, Path(args.png), f"{len(outcomes)} water landings (seed {args.seed})")
+                        sigma=args.sigma, pond_sigma=args.pond_sigma, **extra)
+    save_png(outcomes, Path(args.png), f"{len(outcomes)} water landings (seed {args.seed})",
+             lake)
     print(f"{len(outcomes)} water landings -> {args.output}, {args.png}; {stats}")
 
 
