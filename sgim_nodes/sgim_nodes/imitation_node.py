@@ -31,18 +31,14 @@ from sgim_nodes.ros_glue import (
     run_node,
     vec,
 )
-from sgim_nodes.sim_client import RecentMovements, SimClient
+from sgim_nodes.sim_client import SERVICE_TIMEOUT, RecentMovements, SimClient
 from sgim_ros import qos
-from sgim_ros.params import Param, positive
 
 
 class ImitationNode(AsyncNode):
     def __init__(self) -> None:
         super().__init__("imitation")
-        values, self.config = declare_learner(self, (
-            Param("service_timeout", 30.0, "seconds to wait for the simulator before a retry",
-                  positive, "> 0"),
-        ))
+        values, self.config = declare_learner(self, (SERVICE_TIMEOUT,))
         self.action_size, self.outcome_size = values["action_size"], values["outcome_size"]
         self.rng = component_rng(values["seed"], "imitation")
         recent = RecentMovements()

@@ -37,17 +37,15 @@ from sgim_nodes.ros_glue import (
     run_node,
     vec,
 )
-from sgim_nodes.sim_client import SimClient
+from sgim_nodes.sim_client import SERVICE_TIMEOUT, SimClient
 from sgim_ros import qos
-from sgim_ros.params import Param, positive
 
 
 class LowLevelExplorer(AsyncNode):
     def __init__(self) -> None:
         super().__init__("low_level_explorer")
         values, self.config = declare_learner(self, (
-            Param("service_timeout", 30.0, "seconds to wait for the simulator before a retry",
-                  positive, "> 0"),
+            SERVICE_TIMEOUT,
         ))
         self.action_size, self.outcome_size = values["action_size"], values["outcome_size"]
         self.rng = component_rng(values["seed"], "explorer")

@@ -15,6 +15,11 @@ from rclpy.task import Future
 
 from sgim_msgs.msg import Movement
 from sgim_msgs.srv import ExecuteAction
+from sgim_ros.params import Param, positive
+
+# The parameter of every node that calls the simulator.
+SERVICE_TIMEOUT = Param("service_timeout", 30.0, "seconds to wait for the simulator's answer "
+                        "before retrying the same movement", positive, "> 0")
 
 
 class SimulatorError(RuntimeError):

@@ -39,7 +39,7 @@ from sgim_nodes.core.competence import competence, origin_vector
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.resume import resume_point
 from sgim_nodes.ros_glue import AsyncNode, check_vector, declare_learner, floats, run_node, vec
-from sgim_nodes.sim_client import SimClient, first_of
+from sgim_nodes.sim_client import SERVICE_TIMEOUT, SimClient, first_of
 from sgim_ros import qos
 from sgim_ros.params import Param, non_negative, one_of, positive
 
@@ -68,8 +68,7 @@ class SocialInteraction(AsyncNode):
                   "> 0"),
             Param("teacher_timeout", 60.0, "seconds to wait for the teacher at a boundary",
                   positive, "> 0"),
-            Param("service_timeout", 30.0, "seconds before a simulator call is retried",
-                  positive, "> 0"),
+            SERVICE_TIMEOUT,
             Param("settle_time", 2.0, "seconds of discovery settling before the start",
                   non_negative, ">= 0"),
         ))
