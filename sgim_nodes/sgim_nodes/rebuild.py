@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sgim_nodes.bag_reader import NotABagError, load_run, storage_files
+from sgim_nodes.bag_reader import NotABagError, load_run, storage_files, superseded_removed
 from sgim_nodes.bag_records import (
     DemonstrationRecord,
     EvaluationRecord,
@@ -36,16 +36,13 @@ from sgim_nodes.bag_records import (
 )
 from sgim_nodes.core.competence import OUTCOME_HIGH, OUTCOME_LOW
 from sgim_nodes.core.config import LearnerConfig
-from sgim_nodes.core.goal_reaching import EXPLORATION, GOAL_DIRECTED
-from sgim_nodes.core.imitation import IMITATION
-from sgim_nodes.core.learners import DEMONSTRATION, RANDOM
+from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS, Status
+from sgim_nodes.core.learners import DEMONSTRATION
 from sgim_nodes.core.memory import Memory
 from sgim_nodes.core.region_tree import RegionTree
 
-# Movement.PROCESS_* -> the core's memory labels (PROCESS_EVALUATION is never stored).
-PROCESS_LABELS = {0: GOAL_DIRECTED, 1: EXPLORATION, 2: IMITATION, 3: DEMONSTRATION, 4: RANDOM}
-PROCESS_EVALUATION = 5
-STATUS_OK = 0
+PROCESS_EVALUATION = PROCESS_CODES["evaluation"]  # never stored in memory
+STATUS_OK = Status.OK
 DEFAULT_DIMS = (24, 2)  # the fishing world's action and outcome sizes, for an empty bag
 STATE_NAMES = {0: "running", 1: "finished", 2: "aborted"}
 
@@ -57,7 +54,7 @@ class RebuiltState:
     n_movements: int  # the learner's movement count: the highest Movement.index recorded
     n_recorded: int  # learner movements present in the bag
     missing: list[int] = field(default_factory=list)  # indices 1..n_movements not recorded
-    duplicates: int = 0  # movement indices recorded more than once (the first one is kept)
+    duplicates: int = 0  # records superseded by a later record of the same index
     n_memory_movements: int = 0
     n_demonstrations: int = 0
     n_competences: int = 0
@@ -85,18 +82,11 @@ def _dims(run: RunRecords) -> tuple[int, int]:
 
 
 def _learner_movements(run: RunRecords) -> tuple[list[MovementRecord], int]:
-    """Non-evaluation movements, first copy of each index, and the number of duplicates."""
-    seen: set[int] = set()
-    kept, duplicates = [], 0
-    for m in run.movements:
-        if m.process == PROCESS_EVALUATION:
-            continue
-        if m.index and m.index in seen:
-            duplicates += 1
-            continue
-        seen.add(m.index)
-        kept.append(m)
-    return kept, duplicates
+    """Non-evaluation movements, one record per index (the reader's rule: the last one, the
+    re-execution the learner used), and the number of superseded records."""
+    learner = [m for m in run.movements if m.process != PROCESS_EVALUATION]
+    kept = superseded_removed(learner, "rebuild")
+    return kept, len(learner) - len(kept)
 
 
 def rebuild_from_records(run: RunRecords, config: LearnerConfig | None = None) -> RebuiltState:
@@ -149,7 +139,7 @@ def rebuild(path: str | Path, config: LearnerConfig | None = None) -> RebuiltSta
 
 def summary(state: RebuiltState) -> str:
     missing = f", {len(state.missing)} missing" if state.missing else ""
-    dups = f", {state.duplicates} duplicates ignored" if state.duplicates else ""
+    dups = f", {state.duplicates} superseded records ignored" if state.duplicates else ""
     lines = [
         f"movements: {state.n_movements} (learner count), {state.n_recorded} recorded"
         f"{missing}{dups}",

@@ -13,23 +13,13 @@ import numpy as np
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.node import Node
 
-from sgim_msgs.msg import Movement, Region, RegionMap
+from sgim_msgs.msg import Region, RegionMap
 from sgim_nodes.core.config import LearnerConfig
+from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS  # noqa: F401 - for nodes
 from sgim_nodes.core.learners import LEARNER_NAMES
 from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
 from sgim_ros.entry import AsyncNode, run_node  # noqa: F401 - the nodes' shared entry point
 from sgim_ros.params import Param, ParameterError, declare, one_of
-
-# Core process labels <-> Movement.PROCESS_* codes.
-PROCESS_CODES = {
-    "goal_directed": Movement.PROCESS_GOAL_DIRECTED,
-    "exploration": Movement.PROCESS_EXPLORATION,
-    "imitation": Movement.PROCESS_IMITATION,
-    "demonstration": Movement.PROCESS_DEMONSTRATION,
-    "random": Movement.PROCESS_RANDOM,
-    "evaluation": Movement.PROCESS_EVALUATION,
-}
-PROCESS_LABELS = {code: label for label, code in PROCESS_CODES.items()}
 
 ACTION_SIZE = 24  # the fishing world's; a parameter of every node that checks sizes
 OUTCOME_SIZE = 2

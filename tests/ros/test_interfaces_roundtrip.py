@@ -112,3 +112,14 @@ def test_reach_goal_action_across_processes(peer, node):
     assert list(result.reached) == pytest.approx([0.1, -0.3])
     assert result.movements_used == 3 and result.competence == pytest.approx(-0.25)
     assert feedback and feedback == sorted(feedback) and feedback[-1] <= 3
+
+
+def test_the_cores_process_and_status_codes_are_the_messages():
+    from sgim_msgs.msg import Movement
+    from sgim_nodes.core.environment import PROCESS_CODES, Status
+    from sim_bridge.fishing_world import Status as CastStatus
+
+    for label, code in PROCESS_CODES.items():
+        assert getattr(Movement, f"PROCESS_{label.upper()}") == code, label
+    for status in (*Status, *CastStatus):  # the world cannot import the core: both are checked
+        assert getattr(Movement, f"STATUS_{status.name}") == status.value, status.name

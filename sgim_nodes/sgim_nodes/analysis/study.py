@@ -33,12 +33,14 @@ from sgim_nodes.bag_records import (
     to_record,
 )
 from sgim_nodes.bag_types import TOPICS
+from sgim_nodes.core.environment import PROCESS_CODES, Status
 
 CACHE_NAME = "analysis_cache.npz"
 CACHE_VERSION = 1
 OUTCOME_SIZE = 2
-PROCESS_IMITATION, PROCESS_DEMONSTRATION, PROCESS_EVALUATION = 2, 3, 5
-STATUS_OK = 0
+PROCESS_IMITATION, PROCESS_DEMONSTRATION, PROCESS_EVALUATION = (
+    PROCESS_CODES[label] for label in ("imitation", "demonstration", "evaluation"))
+STATUS_OK = int(Status.OK)
 LEARNER_ORDER = ("sgim-d", "saggriac", "demo-only", "random")
 _RUN_NAME = re.compile(r"^(?P<learner>.+)-seed(?P<seed>\d+)$")
 _WANTED = {"movements": MovementRecord, "evaluations": EvaluationRecord,

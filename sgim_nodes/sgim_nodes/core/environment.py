@@ -24,6 +24,14 @@ class Status(IntEnum):
     INVALID_ACTION = 3
 
 
+# The Movement.PROCESS_* codes of sgim_msgs by the core's process labels, here so that the
+# ROS-free readers of bags (rebuild, analysis) share them with the nodes; a ROS test checks
+# them against the message's constants.
+PROCESS_CODES = {"goal_directed": 0, "exploration": 1, "imitation": 2, "demonstration": 3,
+                 "random": 4, "evaluation": 5}
+PROCESS_LABELS = {code: label for label, code in PROCESS_CODES.items()}
+
+
 class ResultLike(Protocol):
     """What ``execute`` returns: ``outcome`` is only meaningful when ``status == 0``."""
 
