@@ -1,4 +1,5 @@
-"""The entry point every node of the graph shares, and the base of nodes that await.
+"""The entry point every node of the graph shares, the base of nodes that await, and a
+bounded await.
 
 A node that cannot start (a bad parameter, a missing file) says why in one line and exits with
 code 2; Ctrl-C and external shutdown end it cleanly, and it is always destroyed.
@@ -14,6 +15,7 @@ import rclpy
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.task import Future
 
 from sgim_ros.params import ParameterError
 
@@ -31,6 +33,22 @@ class AsyncNode(Node):
     def __init__(self, name: str, **kwargs: Any) -> None:
         super().__init__(name, **kwargs)
         self._default_callback_group = ReentrantCallbackGroup()
+
+
+async def first_of(node: Node, future: Future, timeout: float) -> bool:
+    """Await `future` for at most `timeout` seconds; True if it completed."""
+    either = Future(executor=node.executor)
+
+    def finish(value: bool) -> None:
+        if not either.done():
+            either.set_result(value)
+
+    future.add_done_callback(lambda _: finish(True))
+    timer = node.create_timer(timeout, lambda: finish(False))
+    try:
+        return await either
+    finally:
+        node.destroy_timer(timer)
 
 
 def run_node(factory: Callable[[], Node], args: list[str] | None = None,

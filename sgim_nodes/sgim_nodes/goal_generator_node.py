@@ -24,6 +24,7 @@ from sgim_nodes.core.region_snapshot import RegionSnapshot
 from sgim_nodes.resume import resume_point
 from sgim_nodes.ros_glue import AsyncNode, declare_learner, floats, run_node, snapshot_from_msg
 from sgim_ros import qos
+from sgim_ros.entry import first_of
 from sgim_ros.params import Param, positive
 
 MODE_CODES = {1: Goal.MODE_INTEREST_REGION, 2: Goal.MODE_UNIFORM, 3: Goal.MODE_LEAST_COMPETENT}
@@ -63,10 +64,8 @@ class GoalGenerator(AsyncNode):
         if self.snapshot is None or self.snapshot.goal_count < request.min_goal_count:
             ready = Future(executor=self.executor)
             self._waiters.append((request.min_goal_count, ready))
-            timer = self.create_timer(self.timeout, lambda: ready.done() or ready.set_result(False))
-            ok = await ready
-            self.destroy_timer(timer)
-            if not ok:
+            if not await first_of(self, ready, self.timeout):
+                self._waiters = [(n, f) for n, f in self._waiters if f is not ready]
                 have = -1 if self.snapshot is None else self.snapshot.goal_count
                 response.ok = False
                 response.message = (f"no region map with {request.min_goal_count} goals after "

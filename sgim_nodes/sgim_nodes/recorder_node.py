@@ -32,6 +32,7 @@ from rclpy.qos import HistoryPolicy, QoSProfile
 from rclpy.serialization import deserialize_message
 
 from sgim_msgs.msg import Movement, RunStatus
+from sgim_msgs.srv import RecorderReady
 from sgim_nodes.bag_types import STATE_TOPICS, TOPICS
 from sgim_nodes.bag_writer import STORAGES, BagWriteError, SplitBagWriter
 from sgim_ros import qos
@@ -100,8 +101,9 @@ class RecorderNode(Node):
         self._target_index = 0  # the final RunStatus' movement count
         self._last_progress = time.monotonic()
         self._names: dict[str, str] = {}
+        self._record_subs: dict[str, object] = {}
         for name, msgtype in TOPICS.items():
-            sub = self.create_subscription(
+            sub = self._record_subs[name] = self.create_subscription(
                 ros_message_class(msgtype), name,
                 lambda raw, topic=name: self._on_message(topic, raw),
                 topic_qos(name, keep_all=True), raw=True,
@@ -110,10 +112,23 @@ class RecorderNode(Node):
             self.bag.add_topic(sub.topic_name, msgtype)
             self.counts[name] = 0
         self.create_timer(min(0.25, p["split_seconds"] / 4), self._tick)
+        self.create_service(RecorderReady, "recorder_ready", self._ready)
         self.get_logger().info(
             f"recording {len(TOPICS)} topics into {self.bag.path} ({p['storage']}, a part every "
             f"{p['split_seconds']} s or {p['split_messages']} messages)"
         )
+
+    def _ready(self, request: RecorderReady.Request, response: RecorderReady.Response):
+        """Matched, not merely discovered: only a matched publisher's messages reach the bag."""
+        missing = []
+        for topic, wanted in zip(request.topics, request.publishers, strict=False):
+            sub = self._record_subs.get(topic)
+            have = -1 if sub is None else sub.get_publisher_count()
+            if have < wanted:
+                missing.append(f"{topic} ({have}/{wanted})")
+        response.ready = not missing
+        response.message = "" if not missing else "not yet matched: " + ", ".join(missing)
+        return response
 
     def _on_message(self, name: str, raw: bytes) -> None:
         now = self.get_clock().now().nanoseconds

@@ -15,6 +15,7 @@ from rclpy.task import Future
 
 from sgim_msgs.msg import Movement
 from sgim_msgs.srv import ExecuteAction
+from sgim_ros.entry import first_of
 from sgim_ros.params import Param, positive
 
 # The parameter of every node that calls the simulator.
@@ -66,22 +67,6 @@ class SimClient:
 
     async def _sleep(self, seconds: float) -> None:
         await first_of(self.node, Future(), seconds)
-
-
-async def first_of(node: Node, future: Future, timeout: float) -> bool:
-    """Await `future` for at most `timeout` seconds; True if it completed."""
-    either = Future(executor=node.executor)
-
-    def finish(value: bool) -> None:
-        if not either.done():
-            either.set_result(value)
-
-    future.add_done_callback(lambda _: finish(True))
-    timer = node.create_timer(timeout, lambda: finish(False))
-    try:
-        return await either
-    finally:
-        node.destroy_timer(timer)
 
 
 class RecentMovements:

@@ -34,13 +34,15 @@ from rclpy.task import Future
 
 from sgim_msgs.action import Imitate, ReachGoal
 from sgim_msgs.msg import Competence, Demonstration, Evaluation, Movement, RunStatus
-from sgim_msgs.srv import ChooseGoal, ExecuteAction, RegisterDemonstration
+from sgim_msgs.srv import ChooseGoal, ExecuteAction, RecorderReady, RegisterDemonstration
+from sgim_nodes.bag_types import TOPICS as RECORD_TOPICS
 from sgim_nodes.core.competence import competence, origin_vector
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.resume import resume_point
 from sgim_nodes.ros_glue import AsyncNode, check_vector, declare_learner, floats, run_node, vec
-from sgim_nodes.sim_client import SERVICE_TIMEOUT, SimClient, first_of
+from sgim_nodes.sim_client import SERVICE_TIMEOUT, SimClient
 from sgim_ros import qos
+from sgim_ros.entry import first_of
 from sgim_ros.params import Param, non_negative, one_of, positive
 
 GOAL_BABBLERS = ("sgim-d", "saggriac")
@@ -202,18 +204,27 @@ class SocialInteraction(AsyncNode):
                     raise RunAborted(f"nobody publishes '{topic}' after {timeout:g} s: is its "
                                      "node (evaluator or teacher) up?")
                 await first_of(self, Future(), 0.1)
-        # The recorder must hear the run from its first record: wait for the node itself
-        # (others, like a launcher's progress display, also listen to run_status), then for
-        # our own records to reach it; the settle time lets the other nodes' records match it.
-        while self.p["wait_for_recorder"] and not (
-                "recorder" in self.get_node_names()
-                and self._status.get_subscription_count() >= 1
-                and self._competences.get_subscription_count() >= 1):
-            if time.monotonic() > deadline:
-                raise RunAborted(f"no recorder after {timeout:g} s: start the recorder node, "
-                                 "or set wait_for_recorder to false")
-            await first_of(self, Future(), 0.1)
+        # The recorder must hear the run from its first record: it must have matched every
+        # publisher of every record topic that we see (a late DDS match loses records silently).
+        if self.p["wait_for_recorder"]:
+            await self._wait_for_recorder(deadline, timeout)
         await first_of(self, Future(), self.p["settle_time"])
+
+    async def _wait_for_recorder(self, deadline: float, timeout: float) -> None:
+        ready = self.create_client(RecorderReady, "recorder_ready")
+        why = ("no recorder_ready service: start the recorder node, or set wait_for_recorder "
+               "to false")
+        while time.monotonic() < deadline:
+            if ready.service_is_ready():
+                request = RecorderReady.Request(topics=list(RECORD_TOPICS))
+                request.publishers = [self.count_publishers(t) for t in RECORD_TOPICS]
+                reply = await ready.call_async(request)
+                if reply.ready:
+                    self.destroy_client(ready)
+                    return
+                why = f"the recorder is not ready: {reply.message}"
+            await first_of(self, Future(), 0.1)
+        raise RunAborted(f"after {timeout:g} s, {why}")
 
     async def _run(self) -> None:
         while self.count < self.total:

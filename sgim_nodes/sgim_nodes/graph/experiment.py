@@ -205,6 +205,10 @@ def prepare_resume(args: argparse.Namespace) -> tuple[Path, dict[str, Any], dict
     return run_dir, params, meta, segment.name
 
 
+def _interrupt(*_: object) -> None:
+    raise KeyboardInterrupt
+
+
 def run(args: argparse.Namespace) -> int:
     if args.resume is not None:
         prepared = prepare_resume(args)
@@ -249,7 +253,7 @@ def run(args: argparse.Namespace) -> int:
     outcome, code = "unknown", 1
     started = time.monotonic()
     interrupted = False
-    previous = signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt))
+    previous = signal.signal(signal.SIGTERM, _interrupt)  # SIGTERM stops a run as Ctrl-C does
     try:
         progress = Progress(args.movements, args.quiet)
         packages = dict((exe, pkg) for pkg, exe in nodes)
