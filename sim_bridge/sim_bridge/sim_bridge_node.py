@@ -43,6 +43,8 @@ PARAMS = (
         lambda v: 0 < v <= 0.01,
         "in (0, 0.01]",
     ),
+    Param("wait_for_recorder", False, "serve execute_action only once the recorder hears the "
+          "movements (a node restarted mid-run would otherwise lose its first records)"),
 )
 
 
@@ -53,11 +55,28 @@ class SimBridgeNode(Node):
         self.world = FishingWorld(seed=p["seed"], noise=p["noise"], time_step=p["time_step"])
         self.executed = 0
         self._movements = self.create_publisher(Movement, "movements", qos.RECORDS)
-        self.create_service(ExecuteAction, "execute_action", self._execute)
+        self._service = None
+        if p["wait_for_recorder"]:
+            self._gate = self.create_timer(0.1, self._open_when_recorded)
+        else:
+            self._open()
         self.get_logger().info(
             f"fishing world ready (seed {p['seed']}, noise {p['noise']}, "
             f"dt {p['time_step']:.5f} s, action size {self.world.action_dim})"
         )
+
+    def _open(self) -> None:
+        self._service = self.create_service(ExecuteAction, "execute_action", self._execute)
+
+    def _open_when_recorded(self) -> None:
+        """Clients wait for the service, so holding it back holds every movement back until
+        the recorder is discovered and every discovered listener is matched."""
+        listeners = self.get_subscriptions_info_by_topic(self._movements.topic_name)
+        if (any(info.node_name == "recorder" for info in listeners)
+                and self._movements.get_subscription_count() >= len(listeners)):
+            self._gate.cancel()
+            self._open()
+            self.get_logger().info("the recorder hears the movements: serving execute_action")
 
     def _execute(self, request: ExecuteAction.Request, response: ExecuteAction.Response):
         result = self.world.execute(np.asarray(request.action, dtype=float))

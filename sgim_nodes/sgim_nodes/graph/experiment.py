@@ -74,7 +74,8 @@ def parameters(args: argparse.Namespace, run_dir: Path) -> dict[str, Any]:
     values.update(learner=args.learner, seed=args.seed, movements=args.movements,
                   eval_every=args.eval_every, demonstration_period=args.period,
                   teacher=TEACHER_MODES[args.teacher] if args.learner in SOCIAL else "none",
-                  output=str(run_dir / "bag"), storage=args.storage)
+                  output=str(run_dir / "bag"), storage=args.storage,
+                  wait_for_recorder=True)  # records start only once the recorder hears them
     return values
 
 
