@@ -43,7 +43,7 @@ def main() -> int:
                     "--runs-dir", str(out), "--name", "graph", "--quiet"], check=True)
     graph_s = time.perf_counter() - start
 
-    from sgim_nodes.bag_reader import load_run
+    from sgim_nodes.bag.reader import load_run
 
     run = load_run(out / "graph" / "bag")
     records = [json.loads(line) for line in (out / "runner.jsonl").read_text().splitlines()]

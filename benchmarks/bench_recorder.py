@@ -27,9 +27,9 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(REPO), str(REPO / "sgim_nodes")]
 
-from sgim_nodes.bag_reader import NotABagError, load_run  # noqa: E402
-from sgim_nodes.bag_types import typestore  # noqa: E402
-from sgim_nodes.bag_writer import SplitBagWriter  # noqa: E402
+from sgim_nodes.bag.reader import NotABagError, load_run  # noqa: E402
+from sgim_nodes.bag.types import typestore  # noqa: E402
+from sgim_nodes.bag.writer import SplitBagWriter  # noqa: E402
 from sgim_nodes.graph.domain import isolated_ros_environment, reserve_domain  # noqa: E402
 
 GRACE = 0.5  # finish_grace given to the recorder
@@ -58,7 +58,7 @@ def writer_alone(tmp: Path, n: int, split_messages: int) -> None:
 
 
 def recorder(output: Path, env: dict, **params) -> subprocess.Popen:
-    args = [sys.executable, "-m", "sgim_nodes.recorder_node", "--ros-args",
+    args = [sys.executable, "-m", "sgim_nodes.nodes.recorder", "--ros-args",
             "-p", f"output:={output}", "-p", f"finish_grace:={GRACE}"]
     for name, value in params.items():
         args += ["-p", f"{name}:={value}"]

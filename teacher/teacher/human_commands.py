@@ -37,7 +37,7 @@ import yaml
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.inverse_model import InverseModel
 from sgim_nodes.core.memory import Memory
-from teacher.teaching import Teacher
+from sgim_nodes.core.teaching import Teacher
 
 OUTCOME_SIZE = 2
 # The automatic teacher's default, so that both teachers call the same goals "reached".

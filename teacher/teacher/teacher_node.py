@@ -18,13 +18,13 @@ import numpy as np
 from rclpy.node import Node
 
 from sgim_msgs.msg import Demonstration, Movement, RunStatus
+from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.core.random_streams import component_rng
-from sgim_nodes.resume import resume_point
-from sgim_nodes.ros_glue import floats, run_node, vec
+from sgim_nodes.core.teaching import PAPER_PERIOD, Teacher
+from sgim_nodes.nodes.ros_glue import floats, run_node, vec
 from sgim_ros import qos
 from sgim_ros.params import Param, declare, non_negative
 from sim_bridge.data_files import load_teaching_set
-from teacher.teaching import PAPER_PERIOD, Teacher
 
 
 class TeacherNode(Node):
@@ -38,7 +38,7 @@ class TeacherNode(Node):
             Param("tolerance", 0.05, "distance under which a teaching goal counts as reached",
                   non_negative, ">= 0"),
             Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one"),
-            Param("resume_from", "", "run folder to resume (see sgim_nodes/resume.py)"),
+            Param("resume_from", "", "run folder to resume (see sgim_nodes/bag/resume.py)"),
             Param("resume_segments", 0, "how many of its recordings to read (0: all)",
                   lambda v: v >= 0, ">= 0"),
         ))

@@ -20,7 +20,7 @@ def node_command(executable: str, module: str) -> list[str]:
 
 
 def recorder_command(output: Path, **params) -> list[str]:
-    args = [*node_command("recorder", "sgim_nodes.recorder_node"), "--ros-args",
+    args = [*node_command("recorder", "sgim_nodes.nodes.recorder"), "--ros-args",
             "-p", f"output:={output}"]
     for name, value in params.items():
         args += ["-p", f"{name}:={value}"]
@@ -29,8 +29,8 @@ def recorder_command(output: Path, **params) -> list[str]:
 
 def publishers(client) -> dict:
     """One publisher per recorded topic, with the graph's QoS."""
-    from sgim_nodes.bag_types import TOPICS
-    from sgim_nodes.recorder_node import ros_message_class, topic_qos
+    from sgim_nodes.bag.types import TOPICS
+    from sgim_nodes.nodes.recorder import ros_message_class, topic_qos
 
     return {name: client.node.create_publisher(ros_message_class(t), f"/{name}", topic_qos(name))
             for name, t in TOPICS.items()}

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from sgim_nodes.bag_types import TOPICS, typestore
-from sgim_nodes.bag_writer import SplitBagWriter
+from sgim_nodes.bag.types import TOPICS, typestore
+from sgim_nodes.bag.writer import SplitBagWriter
 
 TS = typestore()
 T = TS.types

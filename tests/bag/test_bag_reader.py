@@ -9,7 +9,7 @@ import warnings
 import numpy as np
 import pytest
 
-from sgim_nodes.bag_reader import (
+from sgim_nodes.bag.reader import (
     BagReadWarning,
     NotABagError,
     load_run,
@@ -17,7 +17,7 @@ from sgim_nodes.bag_reader import (
     read_raw,
     storage_files,
 )
-from sgim_nodes.bag_writer import BagWriteError, SplitBagWriter
+from sgim_nodes.bag.writer import BagWriteError, SplitBagWriter
 from tests.bag import samples
 
 

@@ -7,7 +7,7 @@ import pytest
 from rosbags.highlevel import AnyReader
 from rosbags.rosbag2 import StoragePlugin, Writer
 
-from sgim_nodes.bag_types import SOURCE_MSG_DIR, sgim_types, typestore
+from sgim_nodes.bag.types import SOURCE_MSG_DIR, sgim_types, typestore
 from tests.bag import samples
 
 
@@ -64,7 +64,7 @@ def test_round_trip_of_every_type_through_a_bag(tmp_path, storage):
 def test_hashes_match_the_rosidl_ones_when_the_workspace_is_built():
     import json
 
-    from sgim_nodes.bag_types import msg_dir
+    from sgim_nodes.bag.types import msg_dir
 
     directory = msg_dir()
     if directory == SOURCE_MSG_DIR:

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sgim_nodes.bag_reader import BagReadWarning, storage_files
+from sgim_nodes.bag.reader import BagReadWarning, storage_files
+from sgim_nodes.bag.rebuild import main, rebuild
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.memory import Memory
 from sgim_nodes.core.region_tree import RegionTree
-from sgim_nodes.rebuild import main, rebuild
 from tests.bag import samples
 
 CONFIG = LearnerConfig(max_goals_per_region=6, zeta=4, min_goals_per_child=2)

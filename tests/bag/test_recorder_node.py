@@ -13,7 +13,7 @@ import warnings
 import numpy as np
 import pytest
 
-from sgim_nodes.bag_reader import BagReadWarning, load_run
+from sgim_nodes.bag.reader import BagReadWarning, load_run
 from tests.bag import ros_helpers as h
 from tests.ros.graph_client import GraphClient
 

@@ -23,12 +23,12 @@ def client(rclpy_context):
 
 
 def _replay(bag, *args) -> list[str]:
-    return [*h.node_command("replay", "sgim_nodes.replay"), str(bag), *args]
+    return [*h.node_command("replay", "sgim_nodes.bag.replay"), str(bag), *args]
 
 
 def test_replay_at_a_high_rate_delivers_everything(ros_processes, client, tmp_path):
-    from sgim_nodes.bag_types import TOPICS
-    from sgim_nodes.recorder_node import ros_message_class, topic_qos
+    from sgim_nodes.bag.types import TOPICS
+    from sgim_nodes.nodes.recorder import ros_message_class, topic_qos
 
     messages = samples.synthetic_run(120, seed=3)
     bag = samples.write_bag(tmp_path / "run", messages, split_messages=50)
@@ -73,8 +73,8 @@ def test_replay_refuses_bad_input_with_a_clear_message(ros_processes, tmp_path):
 
 
 def test_the_recorded_gaps_are_kept_divided_by_the_rate():
-    from sgim_nodes.bag_reader import RawRecord
-    from sgim_nodes.replay import offsets
+    from sgim_nodes.bag.reader import RawRecord
+    from sgim_nodes.bag.replay import offsets
 
     records = [RawRecord("/movements", "sgim_msgs/msg/Movement", t, b"")
                for t in (5_000_000_000, 5_500_000_000, 7_000_000_000)]

@@ -22,8 +22,8 @@ def test_learner_yaml_holds_every_learner_default():
 
 
 def test_node_parameter_files_hold_the_code_defaults():
+    from sgim_nodes.core.teaching import PAPER_PERIOD
     from sim_bridge.fishing_world import DEFAULT_NOISE, DEFAULT_TIME_STEP
-    from teacher.teaching import PAPER_PERIOD
 
     sim = yaml.safe_load((REPO / "sim_bridge" / "config" / "sim_bridge.yaml").read_text())
     values = sim["sim_bridge"]["ros__parameters"]

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from teacher.teaching import Teacher
+from sgim_nodes.core.teaching import Teacher
 
 ACTIONS = np.array([[0.0, 0.0], [0.1, 0.1], [0.2, 0.2]])
 OUTCOMES = np.array([[0.0, 0.0], [0.5, 0.5], [-0.5, 0.5]])

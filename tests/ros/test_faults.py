@@ -38,7 +38,7 @@ def find_process(*parts: str) -> int | None:
 def test_a_killed_simulator_is_restarted_and_no_movement_is_lost_or_doubled(
         ros_processes, ros_domain, tmp_path, rclpy_context):
     from sgim_msgs.msg import Movement
-    from sgim_nodes.bag_reader import load_run
+    from sgim_nodes.bag.reader import load_run
     from sgim_ros import qos
     from tests.ros.graph_client import GraphClient
 
@@ -60,7 +60,7 @@ def test_a_killed_simulator_is_restarted_and_no_movement_is_lost_or_doubled(
     assert child.returncode == 0, output[-3000:]
     assert "restarting" in output
 
-    from sgim_nodes.bag_reader import read_messages
+    from sgim_nodes.bag.reader import read_messages
 
     raw = [m.index for topic, _, m in read_messages(tmp_path / "sim-kill" / "bag",
                                                   ["movements"])]
@@ -77,7 +77,7 @@ def test_a_killed_simulator_is_restarted_and_no_movement_is_lost_or_doubled(
 def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
         ros_processes, ros_domain, tmp_path, rclpy_context):
     from sgim_msgs.msg import Movement
-    from sgim_nodes.resume import load_run_folder, segments
+    from sgim_nodes.bag.resume import load_run_folder, segments
     from sgim_ros import qos
     from tests.ros.graph_client import GraphClient
 

@@ -32,7 +32,7 @@ def run_graph(ros_processes, ros_domain, tmp_path, learner, *extra, timeout=300)
 def finish(child, tmp_path, learner, timeout=330):
     output, _ = child.communicate(timeout=timeout)
     assert child.returncode == 0, output[-3000:]
-    from sgim_nodes.bag_reader import load_run
+    from sgim_nodes.bag.reader import load_run
 
     return load_run(tmp_path / learner / "bag")
 
@@ -178,7 +178,7 @@ def test_the_human_teacher_script_drives_a_run_through_the_prompt(
     reader.join(timeout=10)
     output = "".join(lines)
     assert "999" in output and "error" in output.lower()
-    from sgim_nodes.bag_reader import load_run
+    from sgim_nodes.bag.reader import load_run
 
     run = load_run(tmp_path / "human" / "bag")
     assert [d.source for d in run.demonstrations] == ["human"]

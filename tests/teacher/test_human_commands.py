@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from sgim_nodes.core.config import LearnerConfig
+from sgim_nodes.core.teaching import Teacher
 from teacher.human_commands import (
     DEFAULT_TOLERANCE,
     HELP,
@@ -28,7 +29,6 @@ from teacher.human_commands import (
     prompt,
     unexecuted_demonstration,
 )
-from teacher.teaching import Teacher
 
 A = 24
 OUTCOMES = np.array([[0.0, 0.0], [0.5, 0.5], [-0.5, 0.5], [0.5, -0.5]])

@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from sgim_nodes.bag_reader import BagReadWarning, NotABagError, _Deserializer, read_raw
-from sgim_nodes.bag_records import (
+from sgim_nodes.bag.reader import BagReadWarning, NotABagError, _Deserializer, read_raw
+from sgim_nodes.bag.records import (
     DemonstrationRecord,
     EvaluationRecord,
     MovementRecord,
@@ -32,7 +32,7 @@ from sgim_nodes.bag_records import (
     RunStatusRecord,
     to_record,
 )
-from sgim_nodes.bag_types import TOPICS
+from sgim_nodes.bag.types import TOPICS
 from sgim_nodes.core.environment import PROCESS_CODES, Status
 
 CACHE_NAME = "analysis_cache.npz"

@@ -28,6 +28,7 @@ from .evaluator import EVALUATION_SEED_OFFSET, Evaluator
 from .learners import LEARNER_NAMES, Learner, make_learner
 from .planar_arm import PlanarArm, benchmark_goals, teaching_set
 from .random_streams import component_rng
+from .teaching import Teacher
 
 ENV_NAMES = ("fishing", "planar-arm")
 EVALUATION = "evaluation"
@@ -92,8 +93,6 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
     """
     teacher = None
     if learner.social and world.teaching_actions is not None:
-        from teacher.teaching import Teacher  # the teacher package's logic, no ROS
-
         teacher = Teacher(world.teaching_actions, world.teaching_outcomes,
                           component_rng(seed, "teacher"), teacher_period,
                           teacher_tolerance)

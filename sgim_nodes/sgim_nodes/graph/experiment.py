@@ -30,10 +30,10 @@ from typing import Any
 
 import yaml
 
+from sgim_nodes.bag.resume import next_segment, segments
 from sgim_nodes.core.learners import LEARNER_NAMES
 from sgim_nodes.graph.domain import isolated_ros_environment, reserve_domain
 from sgim_nodes.graph.processes import ProcessGroup
-from sgim_nodes.resume import next_segment, segments
 
 REPO = Path(__file__).resolve().parents[3]
 ROS2RUN = REPO / "ros_ws" / "ros2run.sh"

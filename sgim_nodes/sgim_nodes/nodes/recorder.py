@@ -2,7 +2,7 @@
 
 Messages are taken as raw CDR bytes (`raw=True`) and written as they are: no deserialisation
 on the hot path, and the bag holds exactly what crossed the wire. The bag is written by
-bag_writer.SplitBagWriter as a sequence of small finished files, because rosbags' Writer only
+bag.writer.SplitBagWriter as a sequence of small finished files, because rosbags' Writer only
 leaves a readable file when closed: a SIGKILL loses at most the open part (`split_messages`
 messages or the last `split_seconds`), Ctrl-C, SIGINT and SIGTERM lose nothing (the part is
 closed in a finally). A final RunStatus (FINISHED or ABORTED) ends the recording once the
@@ -33,8 +33,8 @@ from rclpy.serialization import deserialize_message
 
 from sgim_msgs.msg import Movement, RunStatus
 from sgim_msgs.srv import RecorderReady
-from sgim_nodes.bag_types import STATE_TOPICS, TOPICS
-from sgim_nodes.bag_writer import STORAGES, BagWriteError, SplitBagWriter
+from sgim_nodes.bag.types import STATE_TOPICS, TOPICS
+from sgim_nodes.bag.writer import STORAGES, BagWriteError, SplitBagWriter
 from sgim_ros import qos
 from sgim_ros.entry import run_node
 from sgim_ros.params import Param, declare, one_of, positive

@@ -21,13 +21,13 @@ import numpy as np
 from rclpy.node import Node
 
 from sgim_msgs.msg import Demonstration, Evaluation, Movement, RunStatus
+from sgim_nodes.bag.rebuild import rebuild_from_records
+from sgim_nodes.bag.resume import records_until, resume_point
 from sgim_nodes.core.evaluator import EVALUATION_SEED_OFFSET, Evaluator
 from sgim_nodes.core.inverse_model import InverseModel
 from sgim_nodes.core.learners import inverse_model_for, inverse_or_centre
-from sgim_nodes.movement_memory import MovementMemory
-from sgim_nodes.rebuild import rebuild_from_records
-from sgim_nodes.resume import records_until, resume_point
-from sgim_nodes.ros_glue import declare_learner, floats, run_node, vec
+from sgim_nodes.nodes.movement_memory import MovementMemory
+from sgim_nodes.nodes.ros_glue import declare_learner, floats, run_node, vec
 from sgim_ros import qos
 from sgim_ros.params import Param, non_negative
 from sim_bridge.data_files import load_benchmark_goals

@@ -5,9 +5,9 @@ the graph's QoS, keeping the recorded time gaps divided by --rate. It first wait
 for subscribers, because records are VOLATILE: a message published before a subscriber
 matched is gone for it. State topics (region_map) keep only their latest value in the
 publisher, so each of them is acknowledged before the next is sent, or fast replays would
-skip maps. Damaged bag parts are skipped with a warning (see bag_reader).
+skip maps. Damaged bag parts are skipped with a warning (see bag.reader).
 
-Usage: python -m sgim_nodes.replay BAG [--rate 2.0] [--topics movements goals] [--ros-args ...]
+Usage: python -m sgim_nodes.bag.replay BAG [--rate 2.0] [--topics movements goals] [--ros-args ...]
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ import time
 import warnings
 from pathlib import Path
 
-from sgim_nodes.bag_reader import NotABagError, RawRecord, read_raw
-from sgim_nodes.bag_types import STATE_TOPICS
+from sgim_nodes.bag.reader import NotABagError, RawRecord, read_raw
+from sgim_nodes.bag.types import STATE_TOPICS
 
 ACK_TIMEOUT = 5.0  # seconds to wait at the end for every subscriber to acknowledge
 
@@ -64,7 +64,7 @@ def play(records: list[RawRecord], rate: float, wait_subscribers: float,
     from rclpy.duration import Duration
     from tqdm import tqdm
 
-    from sgim_nodes.recorder_node import ros_message_class, topic_qos
+    from sgim_nodes.nodes.recorder import ros_message_class, topic_qos
 
     rclpy.init(args=args)
     node = rclpy.create_node("replay")

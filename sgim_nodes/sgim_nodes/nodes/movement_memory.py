@@ -15,8 +15,8 @@ from rclpy.task import Future
 from sgim_msgs.msg import Movement
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.learners import DEMONSTRATION, build_memory
-from sgim_nodes.ros_glue import PROCESS_LABELS, check_vector, vec
-from sgim_nodes.sim_client import RecentMovements
+from sgim_nodes.nodes.ros_glue import PROCESS_LABELS, check_vector, vec
+from sgim_nodes.nodes.sim_client import RecentMovements
 from sgim_ros import qos
 
 

@@ -21,13 +21,13 @@ from __future__ import annotations
 from sgim_msgs.action import ReachGoal
 from sgim_msgs.msg import Competence
 from sgim_msgs.srv import ExecuteAction, RegisterDemonstration
+from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.core.competence import competence, origin_vector
 from sgim_nodes.core.environment import MovementResult
 from sgim_nodes.core.goal_reaching import GoalAttempt
 from sgim_nodes.core.random_streams import component_rng
-from sgim_nodes.movement_memory import MovementMemory
-from sgim_nodes.resume import resume_point
-from sgim_nodes.ros_glue import (
+from sgim_nodes.nodes.movement_memory import MovementMemory
+from sgim_nodes.nodes.ros_glue import (
     PROCESS_CODES,
     AsyncNode,
     JobServer,
@@ -37,7 +37,7 @@ from sgim_nodes.ros_glue import (
     run_node,
     vec,
 )
-from sgim_nodes.sim_client import SERVICE_TIMEOUT, SimClient
+from sgim_nodes.nodes.sim_client import SERVICE_TIMEOUT, SimClient
 from sgim_ros import qos
 
 

@@ -19,10 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
-from sgim_nodes.bag_reader import load_run, superseded_removed
-from sgim_nodes.bag_records import RunRecords
+from sgim_nodes.bag.reader import load_run, superseded_removed
+from sgim_nodes.bag.rebuild import RebuiltState, rebuild_from_records
+from sgim_nodes.bag.records import RunRecords
 from sgim_nodes.core.config import LearnerConfig
-from sgim_nodes.rebuild import RebuiltState, rebuild_from_records
 
 FIRST_SEGMENT = "bag"
 _RESUMED = re.compile(r"^bag\.resume(\d+)$")

@@ -35,12 +35,19 @@ from rclpy.task import Future
 from sgim_msgs.action import Imitate, ReachGoal
 from sgim_msgs.msg import Competence, Demonstration, Evaluation, Movement, RunStatus
 from sgim_msgs.srv import ChooseGoal, ExecuteAction, RecorderReady, RegisterDemonstration
-from sgim_nodes.bag_types import TOPICS as RECORD_TOPICS
+from sgim_nodes.bag.resume import resume_point
+from sgim_nodes.bag.types import TOPICS as RECORD_TOPICS
 from sgim_nodes.core.competence import competence, origin_vector
 from sgim_nodes.core.random_streams import component_rng
-from sgim_nodes.resume import resume_point
-from sgim_nodes.ros_glue import AsyncNode, check_vector, declare_learner, floats, run_node, vec
-from sgim_nodes.sim_client import SERVICE_TIMEOUT, SimClient
+from sgim_nodes.nodes.ros_glue import (
+    AsyncNode,
+    check_vector,
+    declare_learner,
+    floats,
+    run_node,
+    vec,
+)
+from sgim_nodes.nodes.sim_client import SERVICE_TIMEOUT, SimClient
 from sgim_ros import qos
 from sgim_ros.entry import first_of
 from sgim_ros.params import Param, non_negative, one_of, positive

@@ -11,7 +11,7 @@ drift):
           keep the recording order), with the LearnerConfig's region parameters.
 The last recorded region map, when there is one, is compared with the rebuilt leaves.
 
-CLI: python -m sgim_nodes.rebuild BAG [--set name=value ...]   (prints a summary)
+CLI: python -m sgim_nodes.bag.rebuild BAG [--set name=value ...]   (prints a summary)
 """
 
 from __future__ import annotations
@@ -25,8 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from sgim_nodes.bag_reader import NotABagError, load_run, storage_files, superseded_removed
-from sgim_nodes.bag_records import (
+from sgim_nodes.bag.reader import NotABagError, load_run, storage_files, superseded_removed
+from sgim_nodes.bag.records import (
     DemonstrationRecord,
     EvaluationRecord,
     MovementRecord,

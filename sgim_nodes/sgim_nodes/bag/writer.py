@@ -24,7 +24,7 @@ from pathlib import Path
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys.store import Typestore
 
-from sgim_nodes.bag_types import typestore as sgim_typestore
+from sgim_nodes.bag.types import typestore as sgim_typestore
 
 STORAGES = {"mcap": StoragePlugin.MCAP, "sqlite3": StoragePlugin.SQLITE3}
 STAGING_PREFIX = ".part_"

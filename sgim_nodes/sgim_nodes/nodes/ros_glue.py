@@ -86,7 +86,7 @@ COMMON_PARAMS = (
     Param("outcome_size", OUTCOME_SIZE, "numbers per outcome (the world's outcome size)",
           lambda v: v >= 1, ">= 1"),
     Param("resume_from", "", "run folder to resume: state is rebuilt from its recordings "
-          "(see resume.py); empty for a fresh run"),
+          "(see bag/resume.py); empty for a fresh run"),
     Param("resume_segments", 0, "how many of its recordings to read (0: all)",
           lambda v: v >= 0, ">= 0"),
 )

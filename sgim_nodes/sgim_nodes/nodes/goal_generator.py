@@ -18,11 +18,17 @@ from rclpy.task import Future
 
 from sgim_msgs.msg import Goal, RegionMap
 from sgim_msgs.srv import ChooseGoal
+from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.core.goal_selection import GoalSelector
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.core.region_snapshot import RegionSnapshot
-from sgim_nodes.resume import resume_point
-from sgim_nodes.ros_glue import AsyncNode, declare_learner, floats, run_node, snapshot_from_msg
+from sgim_nodes.nodes.ros_glue import (
+    AsyncNode,
+    declare_learner,
+    floats,
+    run_node,
+    snapshot_from_msg,
+)
 from sgim_ros import qos
 from sgim_ros.entry import first_of
 from sgim_ros.params import Param, positive

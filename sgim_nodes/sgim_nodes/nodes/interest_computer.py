@@ -17,11 +17,11 @@ import numpy as np
 from rclpy.node import Node
 
 from sgim_msgs.msg import Competence, RegionMap
+from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.core.competence import OUTCOME_HIGH, OUTCOME_LOW
 from sgim_nodes.core.region_snapshot import RegionIds, snapshot
 from sgim_nodes.core.region_tree import RegionTree
-from sgim_nodes.resume import resume_point
-from sgim_nodes.ros_glue import check_vector, declare_learner, region_map_msg, run_node, vec
+from sgim_nodes.nodes.ros_glue import check_vector, declare_learner, region_map_msg, run_node, vec
 from sgim_ros import qos
 
 

@@ -1,7 +1,7 @@
 """Read a run's bag back in order, as plain Python records, tolerating a damaged part.
 
 A recorder killed mid-run leaves its bag as finished parts plus, possibly, an unfinished one
-(see bag_writer); a disk can also truncate a file. Analysis should get everything that is
+(see bag.writer); a disk can also truncate a file. Analysis should get everything that is
 readable, with a warning naming each file it had to skip, rather than nothing. Each storage
 file is therefore opened on its own (rosbags' own multi-file reader fails as a whole).
 Types come from the definitions embedded in the bag, so reading needs no ROS install.
@@ -24,9 +24,9 @@ from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
-from sgim_nodes.bag_records import RECORD_TYPES, RunRecords, to_record
-from sgim_nodes.bag_types import TOPICS
-from sgim_nodes.bag_writer import STAGING_PREFIX
+from sgim_nodes.bag.records import RECORD_TYPES, RunRecords, to_record
+from sgim_nodes.bag.types import TOPICS
+from sgim_nodes.bag.writer import STAGING_PREFIX
 
 STORAGE_SUFFIXES = (".mcap", ".db3")
 _PART_NUMBER = re.compile(r"_(\d+)\.(mcap|db3)$")
@@ -94,7 +94,7 @@ def storage_files(path: str | Path) -> list[Path]:
 def _load_metadata(meta: Path) -> dict:
     text = meta.read_text(encoding="utf-8")
     try:
-        return json.loads(text)  # what bag_writer writes: fast to parse
+        return json.loads(text)  # what bag.writer writes: fast to parse
     except json.JSONDecodeError:
         from ruamel.yaml import YAML, YAMLError
 
@@ -171,7 +171,7 @@ class _Deserializer:
         if record.msgdef:
             types = get_types_from_msg(record.msgdef, record.msgtype)
         else:  # a bag written without definitions: use our own .msg files
-            from sgim_nodes.bag_types import sgim_types
+            from sgim_nodes.bag.types import sgim_types
 
             types = sgim_types()
         self.store.register({k: v for k, v in types.items() if k not in self.store.types})

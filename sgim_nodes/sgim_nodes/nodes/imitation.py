@@ -22,7 +22,7 @@ from sgim_msgs.srv import ExecuteAction
 from sgim_nodes.core.environment import MovementResult
 from sgim_nodes.core.imitation import Imitation
 from sgim_nodes.core.random_streams import component_rng
-from sgim_nodes.ros_glue import (
+from sgim_nodes.nodes.ros_glue import (
     AsyncNode,
     JobServer,
     check_vector,
@@ -31,7 +31,7 @@ from sgim_nodes.ros_glue import (
     run_node,
     vec,
 )
-from sgim_nodes.sim_client import SERVICE_TIMEOUT, RecentMovements, SimClient
+from sgim_nodes.nodes.sim_client import SERVICE_TIMEOUT, RecentMovements, SimClient
 from sgim_ros import qos
 
 

@@ -16,7 +16,7 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
 PACKAGE = "sgim_msgs"
-SOURCE_MSG_DIR = Path(__file__).resolve().parents[2] / PACKAGE / "msg"
+SOURCE_MSG_DIR = Path(__file__).resolve().parents[3] / PACKAGE / "msg"
 
 # Every topic of docs/node_graph.md, as rosbags type names. STATE_TOPICS keep only their
 # latest value (LATEST_STATE QoS); the others are records (RECORDS QoS).
