@@ -306,7 +306,7 @@ class TeachingLibrary:
         for a, y in zip(state.actions, state.outcomes, strict=True):
             memory.add(a, y)
         c = self.config
-        model = InverseModel(memory, c.l_max, c.k_max, c.alpha, c.interpolation_sigma)
+        model = InverseModel(memory, "reliable", c.l_max, c.k_max, c.alpha)
         estimate = model.estimate(goal)
         assert estimate is not None  # the teaching set is never empty
         k = estimate.candidate_index

@@ -9,7 +9,7 @@ makes its choices those of the single-process runner for the same seed.
 Interfaces:
   subscribes  movements, run_status
   publishes   demonstrations (sgim_msgs/Demonstration)
-Parameters: seed, demonstration_period, tolerance, teaching_set.
+Parameters: seed, demonstration_period, tolerance_noise, outcome_noise, teaching_set.
 """
 
 from __future__ import annotations
@@ -20,11 +20,12 @@ from rclpy.node import Node
 from sgim_msgs.msg import Demonstration, Movement, RunStatus
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.core.random_streams import component_rng
-from sgim_nodes.core.teaching import PAPER_PERIOD, Teacher
+from sgim_nodes.core.teaching import DEFAULT_TOLERANCE_NOISE, PAPER_PERIOD, Teacher
 from sgim_nodes.nodes.ros_glue import floats, run_node, vec
 from sgim_ros import qos
-from sgim_ros.params import Param, declare, non_negative
+from sgim_ros.params import Param, declare, non_negative, positive
 from sim_bridge.data_files import load_teaching_set
+from sim_bridge.scaling import OUTCOME_NOISE
 
 
 class TeacherNode(Node):
@@ -35,8 +36,11 @@ class TeacherNode(Node):
                   lambda v: v >= 0, ">= 0"),
             Param("demonstration_period", PAPER_PERIOD, "movements between demonstrations",
                   lambda v: v >= 1, ">= 1"),
-            Param("tolerance", 0.05, "distance under which a teaching goal counts as reached",
-                  non_negative, ">= 0"),
+            Param("tolerance_noise", DEFAULT_TOLERANCE_NOISE, "a teaching goal counts as "
+                  "reached within this many units of the world's outcome noise", non_negative,
+                  ">= 0"),
+            Param("outcome_noise", OUTCOME_NOISE, "the world's outcome noise (outcome units)",
+                  positive, "> 0"),
             Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one"),
             Param("resume_from", "", "run folder to resume (see sgim_nodes/bag/resume.py)"),
             Param("resume_segments", 0, "how many of its recordings to read (0: all)",
@@ -44,7 +48,8 @@ class TeacherNode(Node):
         ))
         ts = load_teaching_set(p["teaching_set"] or None)
         self.teacher = Teacher(ts.actions, ts.outcomes, component_rng(p["seed"], "teacher"),
-                               p["demonstration_period"], p["tolerance"])
+                               p["demonstration_period"],
+                               p["tolerance_noise"] * p["outcome_noise"])
         self.reached: list[np.ndarray] = []
         self.count = 0
         self.total: int | None = None

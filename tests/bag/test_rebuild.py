@@ -19,7 +19,8 @@ def _direct(messages, n_parts_lost: int = 0):
     """The expected state, from the rosbags messages themselves and the core classes."""
     memory = Memory(24, 2)
     tree = RegionTree(np.full(2, -1.0), np.full(2, 1.0), CONFIG.max_goals_per_region,
-                      CONFIG.zeta, CONFIG.min_goals_per_child, CONFIG.min_region_width)
+                      CONFIG.zeta, CONFIG.min_goals_per_child,
+                      CONFIG.min_region_width_size * 2.0, CONFIG.interest_noise_correction)
     for topic, msg in messages:
         if topic == "movements" and msg.status == 0:
             memory.add(msg.action, msg.outcome)

@@ -1,58 +1,39 @@
-"""Similarity and competence against hand-computed values."""
-
-import math
+"""Competence against memory: hand values, and the constants that keep the interest clean."""
 
 import numpy as np
 import pytest
 
-from sgim_nodes.core.competence import (
-    competence,
-    origin_vector,
-    rescaled_distance,
-    similarity,
-)
+from sgim_nodes.core.competence import competence, start_distance
 
-ORIGIN = np.zeros(2)
+G = np.array([0.5, 0.0])
+TOL = 0.05
 
 
-def test_rescaled_distance_spans_zero_to_one():
-    assert rescaled_distance(np.array([-1.0, -1.0]), np.array([1.0, 1.0])) == pytest.approx(1.0)
-    # 0.5 / (2 * sqrt(2))
-    expected = 0.5 / (2 * math.sqrt(2))
-    assert rescaled_distance(np.array([0.5, 0.0]), ORIGIN) == pytest.approx(expected)
+def _at(d):
+    return G + np.array([0.0, d])
 
 
-def test_similarity_hand_values():
-    g = np.array([0.5, 0.0])
-    assert similarity(g, np.array([0.25, 0.0]), ORIGIN) == pytest.approx(-0.5)
-    assert similarity(g, np.array([0.5, 0.3]), ORIGIN) == pytest.approx(-0.6)  # 0.3 / 0.5
-    assert similarity(g, np.array([-1.0, 0.0]), ORIGIN) == -1.0  # ratio 3, capped at 1
-    assert similarity(g, g, ORIGIN) == 0.0
+def test_hand_values():
+    # memory was 0.45 away (0.40 beyond the tolerance); the attempt reached 0.25 (0.20 beyond)
+    assert competence(G, _at(0.25), 0.45, TOL) == pytest.approx(-0.5)
+    assert competence(G, _at(0.05), 0.45, TOL) == 0.0  # within the tolerance: a full success
+    assert competence(G, _at(0.0), 0.45, TOL) == 0.0
+    assert competence(G, None, 0.45, TOL) == -1.0  # every movement failed
 
 
-def test_similarity_goal_at_origin():
-    assert similarity(ORIGIN, ORIGIN, ORIGIN) == 0.0
-    assert similarity(ORIGIN, np.array([0.01, 0.0]), ORIGIN) == -1.0
+def test_no_gain_on_memory_is_exactly_minus_one_wherever_the_goal_lies():
+    # an unreachable goal: the attempt lands no closer than memory already did
+    for d0 in (0.11, 0.3, 0.9):
+        for extra in (0.0, 0.01, 0.5):
+            assert competence(G, _at(d0 + extra), d0, TOL) == -1.0
 
 
-def test_competence_threshold():
-    g = np.array([0.5, 0.0])
-    # Sim = -0.5 <= eps -> competence = Sim
-    assert competence(g, np.array([0.25, 0.0]), ORIGIN, eps_sim=-0.05) == pytest.approx(-0.5)
-    # Sim = -0.02 > eps = -0.05 -> 0 (counted as a full success)
-    assert competence(g, np.array([0.49, 0.0]), ORIGIN, eps_sim=-0.05) == 0.0
-    # Sim exactly at eps -> Sim (the formula uses <=)
-    y = np.array([0.45, 0.0])
-    sim = similarity(g, y, ORIGIN)
-    assert sim == pytest.approx(-0.1)
-    assert competence(g, y, ORIGIN, eps_sim=sim) == sim
-    assert competence(g, y, ORIGIN, eps_sim=sim - 1e-9) == 0.0
-    # with eps_sim = 0 competence is Sim itself
-    assert competence(g, np.array([0.49, 0.0]), ORIGIN, eps_sim=0.0) == pytest.approx(-0.02)
+def test_a_goal_memory_already_reaches_is_judged_on_the_tolerance():
+    assert competence(G, _at(0.04), 0.01, TOL) == 0.0
+    assert competence(G, _at(0.075), 0.01, TOL) == pytest.approx(-0.5)  # 0.025 beyond, / 0.05
+    assert competence(G, _at(0.2), 0.01, TOL) == -1.0
 
 
-def test_origin_vector():
-    assert np.array_equal(origin_vector(None, 2), [0.0, 0.0])
-    assert np.array_equal(origin_vector((0.5, -0.5), 2), [0.5, -0.5])
-    with pytest.raises(ValueError):
-        origin_vector((0.5,), 2)
+def test_start_distance_without_memory_is_the_distance_to_the_centre():
+    assert start_distance(0.3, G, np.zeros(2)) == 0.3
+    assert start_distance(float("inf"), G, np.zeros(2)) == pytest.approx(0.5)

@@ -18,8 +18,8 @@ def test_defaults_are_valid_and_frozen():
 @pytest.mark.parametrize(
     ("field", "kwargs"),
     [
-        ("eps_sim", {"eps_sim": 0.1}),
-        ("eps_sim", {"eps_sim": -1.5}),
+        ("success_tolerance_noise", {"success_tolerance_noise": -0.1}),
+        ("competence_reference", {"competence_reference": "origin"}),
         ("zeta", {"zeta": 7}),
         ("zeta", {"zeta": 60, "max_goals_per_region": 50}),
         ("p_mode1", {"p_mode1": 0.5, "p_mode2": 0.2, "p_mode3": 0.2}),
@@ -31,7 +31,10 @@ def test_defaults_are_valid_and_frozen():
         ("imitation_epsilon", {"imitation_epsilon": 0.0}),
         ("goal_budget", {"goal_budget": 0}),
         ("min_goals_per_child", {"min_goals_per_child": 40}),
-        ("origin", {"origin": ()}),
+        ("inverse_model", {"inverse_model": "average"}),
+        ("optimiser", {"optimiser": "bfgs"}),
+        ("reach_threshold_noise", {"reach_threshold_noise": 0.0}),
+        ("attempt_patience", {"attempt_patience": 0}),
     ],
 )
 def test_invalid_values_raise_naming_the_field(field, kwargs):

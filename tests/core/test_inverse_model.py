@@ -1,29 +1,20 @@
-"""Reliability, variance and Gaussian interpolation weights against hand values."""
-
-import math
+"""The inverse model returns one stored action, never an average, and is never worse than the
+plain nearest neighbour on the same memory."""
 
 import numpy as np
 import pytest
 
-from sgim_nodes.core.inverse_model import (
-    InverseModel,
-    action_variance,
-    gaussian_weights,
-    reliability,
-)
+from sgim_nodes.core.config import LearnerConfig
+from sgim_nodes.core.inverse_model import InverseModel, action_variance, reliability
+from sgim_nodes.core.learners import inverse_model_for, make_learner
 from sgim_nodes.core.memory import Memory
+from sgim_nodes.core.planar_arm import ARMS, benchmark_goals
 
 
 def test_formulas_hand_values():
     # mean [0.5, 0.5]; squared distances 0.5 each; / dim 2 -> 0.25
     assert action_variance(np.array([[0.0, 0.0], [1.0, 1.0]])) == pytest.approx(0.25)
     assert reliability(0.1, 0.25, 0.5) == pytest.approx(0.225)
-    e = math.exp(-0.5)  # distance sigma -> exp(-1/2)
-    assert gaussian_weights(np.array([0.0, 0.05]), 0.05) == pytest.approx([1 / (1 + e),
-                                                                           e / (1 + e)])
-    # far distances do not underflow: only differences matter
-    w = gaussian_weights(np.array([10.0, 10.0]), 0.01)
-    assert w == pytest.approx([0.5, 0.5])
 
 
 def _memory():
@@ -37,26 +28,68 @@ def _memory():
     return mem
 
 
-def test_most_reliable_candidate_and_interpolation():
-    mem = _memory()
-    model = InverseModel(mem, l_max=3, k_max=2, alpha=0.5, sigma=0.05)
+def test_the_most_reliable_candidates_own_action_not_an_average():
+    model = InverseModel(_memory(), "reliable", l_max=3, k_max=2, alpha=0.5)
     est = model.estimate(np.array([0.1, 0.0]))
     # candidates: B (0.09, var 1 -> 0.59), A (0.1, var 1 -> 0.6), C (0.2, var 1e-4 -> 0.20005)
     assert est.candidate_index == 2
     assert est.reliability == pytest.approx(0.2 + 0.5 * 0.0001)
-    assert sorted(est.neighbour_indices.tolist()) == [2, 3]
-    # weights of C (d=0.2) and D (d=0.22): exp(-(0.22^2 - 0.2^2) / (2 * 0.05^2))
-    w_d = math.exp(-(0.22**2 - 0.2**2) / (2 * 0.05**2))
-    expected = (0.5 + 0.52 * w_d) / (1 + w_d)
-    assert est.action == pytest.approx([expected])
+    assert est.action == pytest.approx([0.5])  # C's own action, not a blend with D's
 
 
-def test_alpha_zero_picks_the_nearest_candidate():
-    mem = _memory()
-    model = InverseModel(mem, l_max=3, k_max=2, alpha=0.0, sigma=0.05)
+def test_nearest_and_alpha_zero_pick_the_closest_outcome():
+    goal = np.array([0.1, 0.0])
+    assert InverseModel(_memory(), "nearest").estimate(goal).candidate_index == 1
+    assert InverseModel(_memory(), "reliable", 3, 2, alpha=0.0).estimate(goal).candidate_index == 1
+
+
+def test_local_linear_ranks_candidates_by_their_predicted_outcome():
+    mem = Memory(1, 2)
+    mem.add(np.array([-0.9]), np.array([0.09, 0.0]))  # a lucky landing of action -0.9 ...
+    for x in (-0.89, -0.91, -0.88, -0.92):  # ... whose neighbours all land near 0.3
+        mem.add(np.array([x]), np.array([0.3, 0.0]))
+    for x in (0.5, 0.51, 0.49):  # a consistent spot at 0.12
+        mem.add(np.array([x]), np.array([0.12, 0.0]))
+    model = InverseModel(mem, "local-linear", l_max=8, local_radius=0.1, local_step=0.05)
     est = model.estimate(np.array([0.1, 0.0]))
-    assert est.candidate_index == 1  # B is the closest to the goal
+    assert est.action[0] == pytest.approx(0.5, abs=0.011)  # not the lucky -0.9
+    # the spot is flat (all three land at 0.12): no slope to step along, the action stays
+    assert est.predicted_outcome == pytest.approx([0.12, 0.0], abs=0.01)
+
+
+def test_local_linear_steps_along_a_determined_slope():
+    mem = Memory(1, 2)
+    for x in np.linspace(0.4, 0.6, 9):
+        mem.add(np.array([x]), np.array([x, 0.0]))  # outcome = action: slope 1
+    model = InverseModel(mem, "local-linear", l_max=3, local_radius=0.2, local_step=0.05)
+    est = model.estimate(np.array([0.7, 0.0]))
+    assert est.action[0] == pytest.approx(0.65, abs=1e-6)  # the nearest, 0.6, moved 0.05
+    assert est.predicted_outcome == pytest.approx([0.65, 0.0], abs=1e-3)
 
 
 def test_empty_memory_gives_none():
-    assert InverseModel(Memory(1, 2), 3, 2, 0.5, 0.05).estimate(np.zeros(2)) is None
+    for method in ("nearest", "reliable", "local-linear"):
+        assert InverseModel(Memory(1, 2), method).estimate(np.zeros(2)) is None
+
+
+@pytest.mark.parametrize("world", ["arm-7", "arm-20"])
+def test_never_worse_than_the_nearest_neighbour_on_the_same_memory(world):
+    """Memories of short goal-babbling runs; both models are scored on the noise-free arm (no
+    evaluation noise), on the arm's benchmark goals."""
+    spec = ARMS[world]
+    arm = spec.make(0, noise=0.0)
+    goals = benchmark_goals(arm, spec.cells)
+    config = LearnerConfig()
+    for seed in (0, 1):
+        noisy = spec.make(seed)
+        learner = make_learner("random-goals", arm.action_dim, 2, seed, config, noisy.scale)
+        for _ in range(1200):
+            a, _ = learner.next_action()
+            learner.observe(a, noisy.execute(a))
+        ours = inverse_model_for(learner.memory, config)
+        nearest = InverseModel(learner.memory, "nearest")
+
+        def error(model):
+            return np.mean([np.linalg.norm(arm.forward(model(g)) - g) for g in goals])
+
+        assert error(ours) <= error(nearest) * 1.02, (world, seed)

@@ -13,12 +13,18 @@ def test_learner_yaml_holds_every_learner_default():
     values = yaml.safe_load(text)["/**"]["ros__parameters"]
     default = LearnerConfig()
     for f in fields(LearnerConfig):
-        if f.name == "origin":
-            continue
         assert values[f.name] == getattr(default, f.name), f.name
     # The run's own settings are the paper's.
     assert values["movements"] == 5000 and values["eval_every"] == 250
     assert values["demonstration_period"] == 150 and values["action_size"] == 24
+
+
+def test_learner_yaml_comments_are_the_config_docstrings():
+    import runpy
+
+    tool = runpy.run_path(str(REPO / "ros_ws" / "write_learner_yaml.py"))
+    assert tool["expected_text"]() == (REPO / "sgim_nodes" / "config" / "learner.yaml").read_text(
+    ), "run ros_ws/write_learner_yaml.py"
 
 
 def test_node_parameter_files_hold_the_code_defaults():

@@ -1,4 +1,4 @@
-"""The four learners: step API, bookkeeping, the social part, and SAGG-RIAC beating random."""
+"""The learners: step API, bookkeeping, the social part, and goal babbling beating random."""
 
 import numpy as np
 import pytest
@@ -7,7 +7,13 @@ from helpers import FlakyWorld
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.learners import LEARNER_NAMES, make_learner
 from sgim_nodes.core.planar_arm import PlanarArm
-from sgim_nodes.core.runner import World, build_world, run
+from sgim_nodes.core.runner import build_world, run
+
+SCALE = PlanarArm().scale
+
+
+def make(name, seed, config=None, dims=(12, 2)):
+    return make_learner(name, *dims, seed, config, SCALE)
 
 LABELS = {"goal_directed", "exploration", "imitation", "demonstration", "random"}
 
@@ -25,7 +31,7 @@ def _drive(learner, world, n):
 @pytest.mark.parametrize("name", LEARNER_NAMES)
 def test_failed_movements_count_but_are_not_stored(name):
     world = FlakyWorld(PlanarArm(seed=0), every=3)
-    learner = make_learner(name, 12, 2, 0)
+    learner = make(name, 0)
     labels = _drive(learner, world, 300)
     assert set(labels) <= LABELS
     assert learner.n_movements == 300 and learner.n_failures == 100
@@ -33,17 +39,17 @@ def test_failed_movements_count_but_are_not_stored(name):
 
 
 def test_goal_babbling_uses_both_processes_and_feeds_the_tree():
-    learner = make_learner("saggriac", 12, 2, 1)
+    learner = make("saggriac", 1)
     labels = _drive(learner, PlanarArm(seed=1), 800)
     assert {"goal_directed", "exploration"} <= set(labels)
-    assert learner.n_goals > 800 / LearnerConfig().goal_budget
+    assert learner.n_goals >= 800 / LearnerConfig().goal_budget
     total = sum(len(r.goals) for r in learner.tree.leaves)
     assert total == learner.n_goals and len(learner.tree.leaves) > 1
 
 
 def test_sgimd_stores_and_imitates_a_demonstration():
     cfg = LearnerConfig(imitation_count=4, imitation_epsilon=0.1)
-    learner = make_learner("sgim-d", 12, 2, 2, cfg)
+    learner = make("sgim-d", 2, cfg)
     arm = PlanarArm(seed=2)
     demo_a = np.full(12, 0.3)
     demo_y = arm.forward(demo_a)
@@ -62,8 +68,8 @@ def test_sgimd_stores_and_imitates_a_demonstration():
 
 
 def test_a_demonstration_preempts_the_goal_attempt_at_the_next_movement():
-    cfg = LearnerConfig(imitation_count=2, goal_budget=10)
-    learner = make_learner("sgim-d", 12, 2, 4, cfg)
+    cfg = LearnerConfig(imitation_count=2, goal_budget=10, attempt_patience=10)
+    learner = make("sgim-d", 4, cfg)
     arm = PlanarArm(seed=4)
     for _ in range(40):  # fill memory so that attempts are multi-movement goal-directed ones
         a = learner.rngs.random.uniform(-1, 1, 12)
@@ -86,7 +92,7 @@ def test_a_demonstration_preempts_the_goal_attempt_at_the_next_movement():
 def test_the_teachers_turn_ends_the_goal_attempt_even_without_a_demonstration():
     arm = PlanarArm(seed=5)
     for name, interrupted in (("sgim-d", True), ("saggriac", False)):
-        learner = make_learner(name, 12, 2, 5, LearnerConfig(goal_budget=10))
+        learner = make(name, 5, LearnerConfig(goal_budget=10, attempt_patience=10))
         for _ in range(40):
             a = learner.rngs.random.uniform(-1, 1, 12)
             learner.memory.add(a, arm.forward(a), "random")
@@ -104,14 +110,14 @@ def test_the_teachers_turn_ends_the_goal_attempt_even_without_a_demonstration():
 
 def test_non_social_learners_ignore_demonstrations():
     for name in ("saggriac", "random"):
-        learner = make_learner(name, 12, 2, 0)
+        learner = make(name, 0)
         learner.on_demonstration(np.zeros(12), np.array([1.0, 0.0]))
         assert len(learner.memory) == 0
 
 
 def test_demo_only_varies_the_latest_demonstration():
     cfg = LearnerConfig(imitation_epsilon=0.05)
-    learner = make_learner("demo-only", 12, 2, 3, cfg)
+    learner = make("demo-only", 3, cfg)
     arm = PlanarArm()
     assert learner.next_action()[1] == "random"  # nothing to imitate yet
     for demo in (np.full(12, -0.5), np.full(12, 0.5)):
@@ -124,7 +130,7 @@ def test_demo_only_varies_the_latest_demonstration():
 @pytest.mark.parametrize("name", LEARNER_NAMES)
 def test_same_seed_same_run(name):
     def actions(seed):
-        learner = make_learner(name, 12, 2, seed)
+        learner = make(name, seed)
         world = PlanarArm(seed=seed, noise=0.02)
         if learner.social:
             learner.on_demonstration(np.full(12, 0.2), np.array([0.5, 0.5]))
@@ -139,18 +145,25 @@ def test_same_seed_same_run(name):
     assert not np.array_equal(actions(5), actions(6))
 
 
-def test_saggriac_beats_random_on_the_planar_arm():
-    """Short runs over fixed seeds; at 5000 movements the gap is ~3.5x, here ~2x."""
+def test_random_goals_draws_every_goal_uniformly():
+    learner = make("random-goals", 0)
+    arm = PlanarArm(seed=0)
+    _drive(learner, arm, 400)
+    assert learner.selector.p_modes.tolist() == [0.0, 1.0, 0.0]
+    assert learner.n_goals > 0 and learner.last_goal_mode == 2
+
+
+def test_goal_babbling_beats_random_on_the_twenty_joint_arm():
+    """Short runs over fixed seeds on the benchmark arm where random actions pile up near the
+    straight posture (bench_learners.py measures the full 5000-movement comparison)."""
     finals: dict[str, list[float]] = {}
     for seed in (0, 1, 2):
-        world = build_world("planar-arm", seed, arm_cells=8)
-        for name in LEARNER_NAMES:
-            w = World(world.env.__class__(seed=seed), world.eval_env, world.goals,
-                      world.teaching_actions, world.teaching_outcomes)
-            learner = make_learner(name, 12, 2, seed)
-            means = run(learner, w, 1200, 0, seed, lambda r: None)
-            finals.setdefault(name, []).append(means[-1])
-    sag, rnd = np.array(finals["saggriac"]), np.array(finals["random"])
-    assert np.all(sag < rnd), finals
-    assert sag.mean() < 0.75 * rnd.mean(), finals
-    assert np.mean(finals["sgim-d"]) < rnd.mean(), finals
+        for name in ("random", "random-goals", "saggriac", "sgim-d"):
+            w = build_world("arm-20", seed)
+            learner = make_learner(name, 20, 2, seed, LearnerConfig(), w.scale)
+            finals.setdefault(name, []).append(run(learner, w, 1200, 0, seed,
+                                                   lambda r: None)[-1])
+    rnd = np.array(finals["random"])
+    for name in ("random-goals", "saggriac", "sgim-d"):
+        assert np.all(np.array(finals[name]) < rnd), finals
+        assert np.mean(finals[name]) < 0.75 * rnd.mean(), finals

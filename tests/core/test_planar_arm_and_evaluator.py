@@ -58,7 +58,7 @@ def test_evaluator_hand_distances_and_own_world():
 
 def test_evaluation_does_not_count_or_learn():
     train = PlanarArm(seed=0)
-    learner = make_learner("saggriac", 12, 2, 0)
+    learner = make_learner("saggriac", 12, 2, 0, None, train.scale)
     for _ in range(100):
         a, _ = learner.next_action()
         learner.observe(a, train.execute(a))

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from sgim_nodes.core.learners import make_learner
+from sgim_nodes.core.scale import unit_box
 from sgim_nodes.core.random_streams import STREAM_NAMES, component_rng
 
 
@@ -22,7 +23,7 @@ def test_streams_differ_by_name_and_by_seed():
 
 
 def test_the_random_learner_draws_from_its_named_stream():
-    learner = make_learner("random", 24, 2, seed=11)
+    learner = make_learner("random", 24, 2, seed=11, scale=unit_box(2, 0.07))
     expected = component_rng(11, "random").uniform(-1.0, 1.0, (3, 24))
     for row in expected:
         action, label = learner.next_action()

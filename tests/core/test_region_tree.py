@@ -20,6 +20,21 @@ def test_interest_hand_values():
     assert interest([-1.0], 4) == 0.0
 
 
+def test_noise_correction_removes_scatter_but_keeps_a_clear_trend():
+    scatter = [-1.0, 0.0, -1.0, 0.0, -1.0, 0.0, -0.5, -0.5, -1.0, 0.0, -0.5, -0.5]
+    # halves of 6: means -0.5 and -0.5+... the paper's formula sees their raw difference
+    raw = interest(scatter, 12)
+    assert interest(scatter, 12, noise_correction=1.0) < raw or raw == 0.0
+    trend = [-1.0, -1.0, -0.95, -1.0, -0.95, -1.0, 0.0, -0.05, 0.0, 0.0, -0.05, 0.0]
+    # hand value: gap 0.975 - 0.017 = 0.9583, se = sqrt((var_o + var_n) / 6) with ddof 1
+    older, newer = np.array(trend[:6]), np.array(trend[6:])
+    se = np.sqrt((older.var(ddof=1) + newer.var(ddof=1)) / 6)
+    gap = abs(older.mean() - newer.mean())
+    assert interest(trend, 12, 1.0) == pytest.approx(6 * (gap - se) / 12)
+    assert interest(trend, 12, 1.0) > 0.4
+    assert interest([-0.3] * 12, 12, 2.0) == 0.0
+
+
 # Left half (x < 0) progresses (-1, -1, -0.2, -0.2: interest 0.4 with zeta 4), right half is
 # constant (interest 0); chronological order interleaves them.
 GOALS = np.array([[-0.8, 0.1], [0.2, 0.3], [-0.6, -0.5], [0.4, -0.4],

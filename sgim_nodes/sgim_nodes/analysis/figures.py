@@ -30,9 +30,10 @@ from sgim_nodes.analysis.statistics import Curve
 from sgim_nodes.analysis.study import STATUS_OK, RunData, Study
 from sim_bridge.lake import ISOLATED_REGION, draw_shoreline
 
-COLOURS = {"sgim-d": "tab:red", "saggriac": "tab:blue", "demo-only": "tab:green",
+COLOURS = {"sgim-d": "tab:red", "saggriac": "tab:blue", "random-goals": "tab:purple",
+           "demo-only": "tab:green",
            "random": "tab:gray"}
-TREE_LEARNERS = ("sgim-d", "saggriac")
+TREE_LEARNERS = ("sgim-d", "saggriac", "random-goals")
 BINS = 40
 DPI = 110
 

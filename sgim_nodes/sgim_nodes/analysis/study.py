@@ -41,7 +41,7 @@ OUTCOME_SIZE = 2
 PROCESS_IMITATION, PROCESS_DEMONSTRATION, PROCESS_EVALUATION = (
     PROCESS_CODES[label] for label in ("imitation", "demonstration", "evaluation"))
 STATUS_OK = int(Status.OK)
-LEARNER_ORDER = ("sgim-d", "saggriac", "demo-only", "random")
+LEARNER_ORDER = ("sgim-d", "saggriac", "random-goals", "demo-only", "random")
 _RUN_NAME = re.compile(r"^(?P<learner>.+)-seed(?P<seed>\d+)$")
 _WANTED = {"movements": MovementRecord, "evaluations": EvaluationRecord,
            "region_map": RegionMapRecord, "demonstrations": DemonstrationRecord,

@@ -34,12 +34,12 @@ from sgim_nodes.bag.records import (
     RunRecords,
     RunStatusRecord,
 )
-from sgim_nodes.core.competence import OUTCOME_HIGH, OUTCOME_LOW
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS, Status
-from sgim_nodes.core.learners import DEMONSTRATION
+from sgim_nodes.core.learners import DEMONSTRATION, region_tree_for
 from sgim_nodes.core.memory import Memory
 from sgim_nodes.core.region_tree import RegionTree
+from sgim_nodes.core.scale import WorldScale, unit_box
 
 PROCESS_EVALUATION = PROCESS_CODES["evaluation"]  # never stored in memory
 STATUS_OK = Status.OK
@@ -89,14 +89,18 @@ def _learner_movements(run: RunRecords) -> tuple[list[MovementRecord], int]:
     return kept, len(learner) - len(kept)
 
 
-def rebuild_from_records(run: RunRecords, config: LearnerConfig | None = None) -> RebuiltState:
-    """Fold the records of a run into a fresh Memory and RegionTree."""
+FISHING_NOISE = 0.07  # sim_bridge.scaling.OUTCOME_NOISE, without importing the world
+
+
+def rebuild_from_records(run: RunRecords, config: LearnerConfig | None = None,
+                         scale: WorldScale | None = None) -> RebuiltState:
+    """Fold the records of a run into a fresh Memory and RegionTree (``scale``: the world's
+    outcome box and noise; default the fishing world's, [-1, 1]^m)."""
     c = config or LearnerConfig()
     action_dim, outcome_dim = _dims(run)
     memory = Memory(action_dim, outcome_dim, c.memory_rebuild_fraction, c.memory_min_tail,
                     c.memory_max_tail)
-    tree = RegionTree(np.full(outcome_dim, OUTCOME_LOW), np.full(outcome_dim, OUTCOME_HIGH),
-                      c.max_goals_per_region, c.zeta, c.min_goals_per_child, c.min_region_width)
+    tree: RegionTree = region_tree_for(c, scale or unit_box(outcome_dim, FISHING_NOISE))
     movements, duplicates = _learner_movements(run)
     entries: list[tuple[int, int, MovementRecord | DemonstrationRecord]] = [
         (m.index, 0, m) for m in movements] + [(d.movement_index, 1, d)

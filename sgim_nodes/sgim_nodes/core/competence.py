@@ -1,59 +1,53 @@
-"""Similarity and competence of a goal attempt (paper's SAGG-RIAC competence).
+"""Competence of a goal attempt, measured against what memory already reached near the goal.
 
-Sim(yg, y) = -min(1, D(yg, y) / D(yg, yorg)) measures how much of the way from the origin
-outcome to the goal was covered: 0 is a perfect hit, -1 means no closer than where we started.
-D is the Euclidean distance rescaled to [0, 1] over the outcome space [-1, 1]^m (divided by the
-diagonal 2 * sqrt(m)); the ratio is scale free, the rescaling keeps D comparable across worlds.
+The paper's SAGG-RIAC similarity is Sim(y_g, y) = -min(1, D(y_g, y) / D(y_g, y_start)): how much
+of the way from the start to the goal the attempt covered. We take y_start to be the outcome
+memory held closest to the goal BEFORE the attempt (the best the learner could already do),
+not a fixed origin. Why (issue 10, measured in docs/learners.md): with a fixed origin the
+competence of a goal depends on where the goal lies, so goals drawn in one region never share a
+constant competence and unreachable regions never go quiet; against memory, a goal nothing can
+reach gets the constant -1 (no attempt beats memory), a mastered goal 0, and only regions where
+attempts really gain on memory change competence over time, which is what the interest reads.
 
-competence = Sim if Sim <= eps_sim else 0.  eps_sim (in [-1, 0]) is a success tolerance: an
-attempt closer to the goal than |eps_sim| of the goal's distance from the origin counts as a
-full success (competence 0), so tiny noisy errors do not look like progress or regress.
+Noise: an attempt that lands within ``success_tolerance`` of the goal (one noise unit by
+default) is a full success, and both distances are measured beyond that tolerance, so the
+world's noise does not look like progress or regress:
+
+    competence = -min(1, max(0, d - tol) / max(d_start - tol, tol))
+
+with d the attempt's best distance to the goal and d_start memory's before the attempt. An
+attempt that does not beat memory (d >= d_start, every unreachable goal once memory holds the
+nearest reachable outcome) gets exactly -1; one within the tolerance exactly 0. Only goals
+where attempts gain on memory, partly, give other values: the interest of a region (eq. 2)
+is then nonzero exactly where the learner is changing what it can do.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-OUTCOME_LOW = -1.0
-OUTCOME_HIGH = 1.0
+
+def competence(goal: np.ndarray, best_outcome: np.ndarray | None, start_distance: float,
+               success_tolerance: float) -> float:
+    """In [-1, 0]; -1 when nothing was reached (every movement failed)."""
+    if best_outcome is None:
+        return -1.0
+    d = float(np.linalg.norm(np.asarray(best_outcome, float) - np.asarray(goal, float)))
+    excess = max(0.0, d - success_tolerance)
+    if excess == 0.0:
+        return 0.0
+    base = max(start_distance - success_tolerance, success_tolerance)
+    if not math.isfinite(base) or base <= 0.0:
+        return -1.0
+    return -min(1.0, excess / base)
 
 
-def diagonal(dim: int) -> float:
-    """Length of the diagonal of [-1, 1]^dim (the largest possible outcome distance)."""
-    return float((OUTCOME_HIGH - OUTCOME_LOW) * np.sqrt(dim))
-
-
-def rescaled_distance(a: np.ndarray, b: np.ndarray) -> float:
-    """D(a, b): Euclidean distance divided by the outcome space's diagonal, in [0, 1]."""
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
-    return float(np.linalg.norm(a - b) / diagonal(a.shape[-1]))
-
-
-def similarity(goal: np.ndarray, outcome: np.ndarray, origin: np.ndarray) -> float:
-    """Sim = -min(1, D(goal, outcome) / D(goal, origin)).
-
-    A goal equal to the origin makes the ratio undefined: we return 0 if the outcome hits it
-    exactly and -1 otherwise (any miss of a zero-length task is a total miss).
-    """
-    d_reach = rescaled_distance(goal, outcome)
-    d_start = rescaled_distance(goal, origin)
-    if d_start == 0.0:
-        return 0.0 if d_reach == 0.0 else -1.0
-    return -min(1.0, d_reach / d_start)
-
-
-def competence(goal: np.ndarray, outcome: np.ndarray, origin: np.ndarray, eps_sim: float) -> float:
-    """competence = Sim if Sim <= eps_sim else 0 (exactly as stated in issue 4)."""
-    sim = similarity(goal, outcome, origin)
-    return sim if sim <= eps_sim else 0.0
-
-
-def origin_vector(origin: tuple[float, ...] | None, outcome_dim: int) -> np.ndarray:
-    """The configured origin, or the centre of the outcome space when None."""
-    if origin is None:
-        return np.full(outcome_dim, 0.5 * (OUTCOME_LOW + OUTCOME_HIGH))
-    vec = np.asarray(origin, dtype=float)
-    if vec.shape != (outcome_dim,):
-        raise ValueError(f"origin has shape {vec.shape}, expected ({outcome_dim},)")
-    return vec
+def start_distance(closest_distance: float, goal: np.ndarray, centre: np.ndarray) -> float:
+    """Memory's distance to the goal before an attempt; with an empty memory, the distance
+    from the goal to the centre of the outcome box (where a learner with no experience may as
+    well be)."""
+    if math.isfinite(closest_distance):
+        return float(closest_distance)
+    return float(np.linalg.norm(np.asarray(goal, float) - np.asarray(centre, float)))

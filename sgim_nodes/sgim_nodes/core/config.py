@@ -2,8 +2,15 @@
 
 The paper (Nguyen, Baranes & Oudeyer, ICDL 2011) gives only a few values; every other default
 is documented with where it comes from (explauto, the SGIM-lineage code base described in
-shared/notes/sgim-reference-values.md) or why we chose it.  Frozen so that no component can
-mutate the configuration during a run (a known defect of explauto's config dicts).
+shared/notes/sgim-reference-values.md) or the measurement that chose it (docs/learners.md,
+``benchmarks/bench_learners.py``). Frozen so that no component can mutate the configuration
+during a run (a known defect of explauto's config dicts).
+
+Distances are never absolute: a field ending in ``_noise`` is a multiple of the world's
+outcome noise, one ending in ``_size`` a multiple of the side of its outcome box (both declared
+by the world, ``scale.WorldScale``); ``distances(scale)`` turns them into outcome units. The
+same parameter file therefore runs the planar arms and the fishing world. Action-space values
+(``*_action``) are in action units: every world's actions live in [-1, 1]^n.
 """
 
 from __future__ import annotations
@@ -11,20 +18,41 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
+from .scale import WorldScale
+
+INVERSE_MODELS = ("nearest", "reliable", "local-linear")
+OPTIMISERS = ("subspace", "local-linear", "nelder-mead", "random-search")
+
+
+@dataclass(frozen=True)
+class Distances:
+    """The configuration's distances in one world's outcome units (see LearnerConfig)."""
+
+    success_tolerance: float
+    competence_radius: float
+    reach_threshold: float
+    mode3_radius: float
+    min_region_width: float
+    explore_distance: float
+    failure_cost: float
+
 
 @dataclass(frozen=True)
 class LearnerConfig:
-    """All parameters of the learners.  Distances are Euclidean in outcome units ([-1, 1]^m)
-    unless stated otherwise."""
+    """All parameters of the learners (sources in each field's docstring)."""
 
-    # --- competence (paper, section on SAGG-RIAC competence) ---
-    eps_sim: float = -0.05
-    """Sim is in [-1, 0] (0 = goal reached exactly).  A Sim above eps_sim, i.e. an error below
-    5 % of the goal's distance from the origin outcome, is treated as full success
-    (competence 0).  Chosen because the paper gives no value; must lie in [-1, 0]."""
-    origin: tuple[float, ...] | None = None
-    """y_org of the similarity: the outcome the learner starts from.  None = centre of the
-    outcome space.  Chosen because the worlds start the float/hand near the centre."""
+    # --- competence (the paper's SAGG-RIAC competence) ---
+    success_tolerance_noise: float = 1.0
+    """An attempt whose best outcome lands within this many noise units of its goal is a full
+    success (competence 0): closer than the world's own noise, a miss is no information about
+    the learner's skill. Chosen as one noise unit."""
+
+    competence_reference: str = "memory"
+    """What an attempt's distance is measured against: ``memory`` (the closest outcome memory
+    held before the attempt, the paper's y_start) or ``fixed`` (competence_radius_noise noise
+    units: every goal farther than that from anything reachable has the constant -1)."""
+    competence_radius_noise: float = 4.0
+    """The fixed reference distance of ``competence_reference: fixed``, in noise units."""
 
     # --- region tree (paper eq. 2) ---
     max_goals_per_region: int = 50
@@ -36,9 +64,13 @@ class LearnerConfig:
     min_goals_per_child: int = 5
     """A candidate cut must leave at least this many goals on each side; chosen because a
     child with almost no goals has a meaningless interest and the split would be degenerate."""
-    min_region_width: float = 0.05
-    """A dimension narrower than this is not cut; chosen to stop endless splitting when mode 3
-    piles goals onto one point."""
+    interest_noise_correction: float = 0.0
+    """Standard errors removed from the difference of the window halves' mean competences
+    before it counts as progress (region_tree.interest); 0 is the paper's eq. 2 as written.
+    Chosen by measurement: the shuffled-window test of docs/learners.md."""
+    min_region_width_size: float = 0.025
+    """A dimension narrower than this fraction of the outcome box is not cut; stops endless
+    splitting when mode 3 piles goals onto one point.  Chosen: 0.05 on [-1, 1]."""
 
     # --- goal selection (paper section on the three modes) ---
     p_mode1: float = 0.6
@@ -47,47 +79,74 @@ class LearnerConfig:
     """Uniform goal in the whole space.  SGIM-lineage code: 0.2."""
     p_mode3: float = 0.2
     """Region by interest, goal near its least competent goal.  SGIM-lineage code: 0.2."""
-    mode3_radius: float = 0.05
-    """Half-width of the box around the least competent goal in mode 3; chosen as roughly the
-    paper's outcome noise (0.073) so mode 3 probes the same neighbourhood."""
+    mode3_radius_noise: float = 1.0
+    """Half-width of the box around the least competent goal in mode 3, in noise units: mode 3
+    probes the neighbourhood the world's noise makes indistinguishable.  Chosen."""
 
-    # --- inverse model (paper, alpha given) ---
+    # --- inverse model ---
+    inverse_model: str = "local-linear"
+    """How a goal becomes an action (docs/learners.md measures the three): ``nearest`` (the
+    action of the stored outcome nearest to the goal), ``reliable`` (the paper's reliability
+    rank among l_max candidates, the best candidate's own action, never an average of several
+    neighbourhoods), ``local-linear`` (that action moved by one step of a linear model fitted
+    in its own action neighbourhood)."""
     l_max: int = 10
     """Candidate nearest neighbours of the goal.  Chosen; the paper gives no value."""
     k_max: int = 5
-    """Neighbours of each candidate used for its variance and the interpolation.  Chosen."""
+    """Outcome neighbours of each candidate whose actions give its variance.  Chosen."""
     alpha: float = 0.5
     """Reliability = distance + alpha * variance.  Paper: 0.5."""
-    interpolation_sigma: float = 0.05
-    """Width of the Gaussian interpolation weights (outcome units); chosen near the paper's
-    noise 0.073 so that neighbours within the noise weigh alike."""
+    local_radius_action: float = 0.2
+    """Radius of the action neighbourhood a local linear model is fitted on, in action units per
+    number (times sqrt(action size) as a Euclidean radius).  Chosen by measurement."""
+    local_neighbours: int = 60
+    """At most this many pairs (the nearest in action space within the radius) per fit."""
+    local_step_fraction: float = 0.25
+    """The local-linear inverse moves the chosen action towards the goal by at most this
+    fraction of the fit's radius.  Chosen by measurement (docs/learners.md)."""
 
     # --- goal reaching ---
-    explore_gain: float = 2.0
-    """P(explore) = min(explore_cap, explore_gain * distance to the closest reached outcome).
-    Proportional as the issue states; the SGIM-lineage slope is 0.9/(0.1*2) = 4.5 per unit;
-    we halve it so that goals just outside the reached set are still attempted."""
+    explore_gain: float = 4.0
+    """P(explore) = min(explore_cap, explore_gain * d / box side), d the distance from the goal
+    to the closest reached outcome: the paper's rule (it grows with d).  SGIM-lineage code:
+    0.9 / 0.1 = 9 per box side above a 0.1 floor; chosen by measurement (docs/learners.md)."""
     explore_cap: float = 0.5
-    """Cap on P(explore).  Chosen: with a cap of 1 goals far from the reached set would never be
-    attempted, which is exactly where goal babbling extends the reached set."""
-    reach_threshold: float = 0.03
-    """A goal attempt stops once an outcome is this close to the goal; chosen below the paper's
-    noise 0.073 so it is rarely hit by chance."""
+    """Cap on P(explore): goals far from the reached set are still attempted half of the time,
+    since that is where goal babbling extends the reached set.  Chosen."""
+    explore_action: float = 0.3
+    """Exploring perturbs the best-known action for the goal with Gaussian noise of standard
+    deviation min(explore_action, explore_action * d / explore_distance) per action number:
+    small near what is known, up to explore_action far from it.  Chosen by measurement."""
+    explore_distance_size: float = 0.25
+    """Distance (fraction of the box side) at which exploration reaches its full width."""
+    reach_threshold_noise: float = 0.5
+    """A goal attempt stops once an outcome lands within this many noise units of the goal: a
+    closer landing is luck, more movements cannot do better on average.  Chosen."""
+    attempt_patience: int = 3
+    """A goal attempt gives up after this many movements in a row without a new best: an
+    unreachable goal then costs a few movements, not the whole budget.  Chosen."""
     goal_budget: int = 10
-    """Movements per goal attempt (inverse model + Nelder-Mead).  Chosen: 5000 movements then
+    """Movements per goal attempt (inverse model + refinement).  Chosen: 5000 movements then
     give >= 500 goals, enough to split the tree several times."""
+    optimiser: str = "local-linear"
+    """The refinement on real movements: ``local-linear`` (trust-region steps of a linear model
+    refitted after every movement), ``nelder-mead`` (ask/tell simplex seeded from memory),
+    ``random-search`` ((1+1) evolution strategy).  Chosen by measurement (docs/learners.md)."""
+    trust_radius_action: float = 0.1
+    """Initial trust radius of the local-linear refinement and step of the random search, in
+    action units per number (times sqrt(action size) as a Euclidean radius).  Chosen."""
     nm_initial_step: float = 0.1
     """Step of the padding vertices added when memory cannot fill the Nelder-Mead simplex."""
-    failure_cost: float = 2.8284271247461903
-    """Cost given to Nelder-Mead for a failed movement: the diagonal of [-1, 1]^2, i.e. worse
-    than any real outcome."""
+    failure_cost_size: float = 1.5
+    """Cost told to the optimiser for a failed movement, in box sides: worse than any real
+    outcome (the box diagonal of a square is 1.41 sides)."""
 
     # --- social learning (paper) ---
     imitation_count: int = 5
     """Imitations a_demo + a_rand after each demonstration.  Chosen; the paper gives none."""
     imitation_epsilon: float = 0.2
-    """Bound on the Euclidean norm of a_rand (so also on each component).  Chosen small
-    relative to the action range [-1, 1]."""
+    """Bound on the Euclidean norm of a_rand (so also on each component), in action units.
+    Chosen small relative to the action range [-1, 1]."""
 
     # --- memory index ---
     memory_rebuild_fraction: float = 0.5
@@ -103,12 +162,9 @@ class LearnerConfig:
         def fail(name: str, why: str) -> None:
             raise ValueError(f"LearnerConfig.{name}: {why} (got {getattr(self, name)!r})")
 
-        if not -1.0 <= self.eps_sim <= 0.0:
-            fail("eps_sim", "must be in [-1, 0] because Sim is in [-1, 0]")
-        if self.origin is not None and len(self.origin) == 0:
-            fail("origin", "must be None or a non-empty tuple")
         for name in ("max_goals_per_region", "zeta", "l_max", "k_max", "goal_budget",
-                     "memory_min_tail", "memory_max_tail"):
+                     "attempt_patience",
+                     "memory_min_tail", "memory_max_tail", "local_neighbours"):
             if int(getattr(self, name)) < 1:
                 fail(name, "must be >= 1")
         if self.zeta % 2:
@@ -124,18 +180,38 @@ class LearnerConfig:
                 fail(name, "must be a probability in [0, 1]")
         if abs(self.p_mode1 + self.p_mode2 + self.p_mode3 - 1.0) > 1e-9:
             fail("p_mode1", "p_mode1 + p_mode2 + p_mode3 must equal 1")
-        for name in ("mode3_radius", "interpolation_sigma", "reach_threshold",
-                     "nm_initial_step", "failure_cost", "imitation_epsilon",
-                     "memory_rebuild_fraction"):
+        for name in ("mode3_radius_noise", "reach_threshold_noise", "nm_initial_step",
+                     "local_radius_action", "local_step_fraction",
+                     "failure_cost_size", "imitation_epsilon", "memory_rebuild_fraction",
+                     "explore_distance_size", "trust_radius_action"):
             if not getattr(self, name) > 0.0:
                 fail(name, "must be > 0")
-        for name in ("alpha", "explore_gain", "min_region_width"):
+        for name in ("alpha", "explore_gain", "min_region_width_size", "explore_action",
+                     "success_tolerance_noise", "interest_noise_correction"):
             if getattr(self, name) < 0.0:
                 fail(name, "must be >= 0")
         if not 0.0 <= self.explore_cap <= 1.0:
             fail("explore_cap", "must be in [0, 1]")
         if self.imitation_count < 0:
             fail("imitation_count", "must be >= 0")
+        if self.inverse_model not in INVERSE_MODELS:
+            fail("inverse_model", f"must be one of {', '.join(INVERSE_MODELS)}")
+        if self.competence_reference not in ("memory", "fixed"):
+            fail("competence_reference", "must be memory or fixed")
+        if self.optimiser not in OPTIMISERS:
+            fail("optimiser", f"must be one of {', '.join(OPTIMISERS)}")
+
+    def distances(self, scale: WorldScale) -> Distances:
+        """This configuration's distances in the outcome units of the world ``scale``."""
+        return Distances(
+            success_tolerance=self.success_tolerance_noise * scale.noise,
+            competence_radius=self.competence_radius_noise * scale.noise,
+            reach_threshold=self.reach_threshold_noise * scale.noise,
+            mode3_radius=self.mode3_radius_noise * scale.noise,
+            min_region_width=self.min_region_width_size * scale.size,
+            explore_distance=self.explore_distance_size * scale.size,
+            failure_cost=self.failure_cost_size * scale.size,
+        )
 
     def to_dict(self) -> dict[str, Any]:
         """Plain dict (for the run log header)."""

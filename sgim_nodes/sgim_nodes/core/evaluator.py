@@ -6,8 +6,8 @@ movement nor disturbs the training world's state or random stream.  Distances ar
 outcome units.  A movement without an outcome that still came down somewhere (the fishing
 hook on land: its result's ``touchdown``) is measured to that point, which is how far from the
 goal the hook really came; only an execution with no touch-down at all (a physics failure) is
-reported in ``failed`` and counted at ``failure_distance`` (the diagonal of [-1, 1]^2 by
-default: worse than any real outcome) in the mean.
+reported in ``failed`` and counted at ``failure_distance`` (the diagonal of the world's outcome
+box by default: worse than any real outcome) in the mean.
 """
 
 from __future__ import annotations
@@ -17,7 +17,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .competence import diagonal
 from .environment import Environment, is_success
 
 # The evaluator's world gets the run's seed plus this, so its noise stream is the same in the
@@ -45,8 +44,11 @@ class Evaluator:
                  failure_distance: float | None = None) -> None:
         self.env = env
         self.goals = np.asarray(goals, dtype=float)
-        self.failure_distance = (diagonal(self.goals.shape[1]) if failure_distance is None
-                                 else failure_distance)
+        if failure_distance is None:
+            scale = getattr(env, "scale", None)
+            failure_distance = (scale.diagonal if scale is not None
+                                else 2.0 * np.sqrt(self.goals.shape[1]))
+        self.failure_distance = float(failure_distance)
 
     def evaluate(self, inverse: Callable[[np.ndarray], np.ndarray]) -> EvaluationResult:
         """``inverse`` maps a goal to an action (e.g. ``learner.inverse``)."""

@@ -31,12 +31,16 @@ class Imitation:
     """Ask/tell process: ``count`` variations of one demonstrated action."""
 
     def __init__(self, demo_action: np.ndarray, demo_outcome: np.ndarray, count: int,
-                 epsilon: float, rng: np.random.Generator) -> None:
+                 epsilon: float, rng: np.random.Generator,
+                 start_distance: float = float("inf")) -> None:
+        """``start_distance``: memory's distance to the demonstrated outcome before the
+        demonstration was stored (the competence of the imitation is measured against it)."""
         self.demo_action = np.asarray(demo_action, dtype=float)
         self.goal = np.asarray(demo_outcome, dtype=float)
         self.count = count
         self.epsilon = epsilon
         self.rng = rng
+        self.start_distance = start_distance
         self.movements = 0
         self.best_distance = float("inf")
         self.best_outcome: np.ndarray | None = None

@@ -1,11 +1,24 @@
-"""The paper's local inverse model: from a goal outcome to an action.
+"""The local inverse model: from a goal outcome to ONE action, never an average of several.
 
-Among the l_max stored outcomes nearest to the goal, the most reliable one is the one that is
-close to the goal AND whose neighbourhood is consistent (its k_max neighbours were produced by
-similar actions): averaging actions from a redundant, inconsistent neighbourhood would give an
-action that reaches none of them.  reliability = distance + alpha * variance (lower is better);
-the chosen candidate's neighbours' actions are then interpolated with normalised Gaussian
-weights of their outcome's distance to the goal.
+The paper ranks the l_max stored outcomes nearest to the goal by reliability = distance + alpha
+* variance, where the variance is that of the actions that produced the candidate's k_max
+outcome neighbours: a candidate whose neighbourhood was produced by similar actions is a
+consistent place to act from. The paper then interpolated the neighbours' actions; in a
+redundant action space that average lands away from all of them (issue 10: it made about 60 %
+of the final error), so every method here returns one stored action, possibly moved by a
+linear model fitted in that action's own neighbourhood:
+
+- ``nearest``: the action of the stored outcome nearest to the goal;
+- ``reliable``: the action of the most reliable candidate (the paper's rank, no average);
+- ``local-linear``: among the l_max candidates, the action whose outcome, as predicted by a
+  linear model fitted on the pairs around it in action space (local_model.py), lies closest
+  to the goal: the prediction averages the noise of every cast near the action, where a
+  single stored outcome carries it whole. A candidate with no close pairs is ranked by its own
+  stored outcome, so on a memory with no clusters this is the nearest neighbour. The chosen
+  action is then moved by one step of that model towards the goal, no farther than
+  ``local_step`` (a quarter of the fitted radius by default: measured, docs/learners.md).
+
+docs/learners.md compares the three on the same memories (benchmarks/bench_inverse.py).
 """
 
 from __future__ import annotations
@@ -14,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import local_model
 from .memory import Memory
 
 
@@ -30,33 +44,40 @@ def reliability(distance: float, variance: float, alpha: float) -> float:
     return float(distance + alpha * variance)
 
 
-def gaussian_weights(distances: np.ndarray, sigma: float) -> np.ndarray:
-    """Normalised exp(-d^2 / (2 sigma^2)); computed relative to the smallest distance so that
-    far-away neighbours do not all underflow to zero."""
-    d2 = np.asarray(distances, dtype=float) ** 2
-    w = np.exp(-(d2 - d2.min()) / (2.0 * sigma**2))
-    return w / w.sum()
-
-
 @dataclass(frozen=True)
 class InverseEstimate:
     action: np.ndarray
-    neighbour_indices: np.ndarray  # memory indices of the interpolated neighbours
-    weights: np.ndarray
-    candidate_index: int  # memory index of the most reliable candidate
+    candidate_index: int  # memory index of the stored pair the action comes from
     reliability: float
+    predicted_outcome: np.ndarray  # where the model expects the action to land
 
 
 class InverseModel:
     """Reads the memory only; never learns on its own."""
 
-    def __init__(self, memory: Memory, l_max: int, k_max: int, alpha: float,
-                 sigma: float) -> None:
+    def __init__(self, memory: Memory, method: str = "reliable", l_max: int = 10,
+                 k_max: int = 5, alpha: float = 0.5, local_radius: float = 1.0,
+                 local_neighbours: int = 60, local_step: float = 0.25) -> None:
+        if method not in ("nearest", "reliable", "local-linear"):
+            raise ValueError(f"unknown inverse model {method!r}")
         self.memory = memory
+        self.method = method
         self.l_max = l_max
         self.k_max = k_max
         self.alpha = alpha
-        self.sigma = sigma
+        self.local_radius = local_radius
+        self.local_neighbours = local_neighbours
+        self.local_step = local_step
+
+    def most_reliable(self, goal: np.ndarray) -> tuple[int, float]:
+        """Memory index and score of the most reliable of the l_max candidates."""
+        mem = self.memory
+        cand_d, cand_i = mem.nearest(goal, self.l_max)
+        _, neigh_i = mem.nearest(mem.outcomes[cand_i], self.k_max)
+        scores = [reliability(cand_d[j], action_variance(mem.actions[neigh_i[j]]), self.alpha)
+                  for j in range(len(cand_i))]
+        best = int(np.argmin(scores))
+        return int(cand_i[best]), float(scores[best])
 
     def estimate(self, goal: np.ndarray) -> InverseEstimate | None:
         """None when the memory is empty."""
@@ -64,18 +85,37 @@ class InverseModel:
         if len(mem) == 0:
             return None
         goal = np.asarray(goal, dtype=float)
-        cand_d, cand_i = mem.nearest(goal, self.l_max)
-        _, neigh_i = mem.nearest(mem.outcomes[cand_i], self.k_max)
-        scores = np.array([
-            reliability(cand_d[j], action_variance(mem.actions[neigh_i[j]]), self.alpha)
-            for j in range(len(cand_i))
-        ])
-        best = int(np.argmin(scores))
-        idx = neigh_i[best]
-        dist_to_goal = np.linalg.norm(mem.outcomes[idx] - goal, axis=1)
-        w = gaussian_weights(dist_to_goal, self.sigma)
-        action = np.clip(w @ mem.actions[idx], -1.0, 1.0)
-        return InverseEstimate(action, idx, w, int(cand_i[best]), float(scores[best]))
+        if self.method == "nearest":
+            d, i = mem.nearest(goal, 1)
+            index, score = int(i[0]), float(d[0])
+            outcome = mem.outcomes[index].copy()
+        elif self.method == "reliable":
+            index, score = self.most_reliable(goal)
+            outcome = mem.outcomes[index].copy()
+        else:
+            index, score, outcome, fit = self.best_predicted(goal)
+            if fit is not None:
+                action, predicted = local_model.step(fit, goal, self.local_step)
+                # A flat or undetermined fit predicts (almost) no change: then stay put.
+                if np.linalg.norm(predicted - fit.outcome) > 0.05 * score:
+                    return InverseEstimate(action, index, score, predicted)
+        return InverseEstimate(mem.actions[index].copy(), index, score, outcome)
+
+    def best_predicted(self, goal: np.ndarray
+                       ) -> tuple[int, float, np.ndarray, local_model.LocalFit | None]:
+        """The candidate whose locally predicted outcome is nearest to the goal: memory index,
+        that distance, the predicted outcome and the fit (None: too few pairs around it)."""
+        mem = self.memory
+        _, cand_i = mem.nearest(goal, self.l_max)
+        best: tuple[int, float, np.ndarray, local_model.LocalFit | None] | None = None
+        for i in cand_i:
+            fit = local_model.fit(mem, mem.actions[i], self.local_radius, self.local_neighbours)
+            predicted = mem.outcomes[i] if fit is None else fit.outcome
+            d = float(np.linalg.norm(predicted - goal))
+            if best is None or d < best[1]:
+                best = (int(i), d, np.array(predicted, dtype=float), fit)
+        assert best is not None
+        return best
 
     def __call__(self, goal: np.ndarray) -> np.ndarray | None:
         est = self.estimate(goal)

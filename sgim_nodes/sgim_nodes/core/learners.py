@@ -12,6 +12,8 @@ Successful movements are stored in memory; failed ones count as movements but ar
                boundary, then is imitated ``imitation_count`` times; its outcome becomes an
                attempted goal whose competence (best imitation) feeds the region tree.
 - "saggriac":  SAGG-RIAC goal babbling; demonstrations are ignored.
+- "random-goals": goals uniform in the outcome box with the same lower level ("SAGG-Random",
+               Baranes & Oudeyer 2013): the yardstick that tells what the interest adds.
 - "demo-only": always a small variation of the latest demonstration (random actions before
                the first one).
 - "random":    uniform random actions; demonstrations are ignored.
@@ -23,20 +25,23 @@ from collections import deque
 
 import numpy as np
 
-from .competence import OUTCOME_HIGH, OUTCOME_LOW, competence, origin_vector
+from .competence import competence, start_distance
 from .config import LearnerConfig
 from .environment import ResultLike, is_success
-from .goal_reaching import GoalAttempt
+from .goal_reaching import GoalAttempt, probe_scale_for
 from .goal_selection import GoalSelector
 from .imitation import IMITATION, Imitation, perturb
 from .inverse_model import InverseModel
 from .memory import Memory
 from .random_streams import RandomStreams
 from .region_tree import RegionTree
+from .scale import WorldScale
 
 RANDOM = "random"
 DEMONSTRATION = "demonstration"
-LEARNER_NAMES = ("sgim-d", "saggriac", "demo-only", "random")
+LEARNER_NAMES = ("sgim-d", "saggriac", "random-goals", "demo-only", "random")
+GOAL_BABBLERS = ("sgim-d", "saggriac", "random-goals")
+UNIFORM_GOALS = (0.0, 1.0, 0.0)  # random-goals: mode 2 only
 
 
 def build_memory(config: LearnerConfig, action_dim: int,
@@ -51,7 +56,24 @@ def build_memory(config: LearnerConfig, action_dim: int,
 
 def inverse_model_for(memory: Memory, config: LearnerConfig) -> InverseModel:
     c = config
-    return InverseModel(memory, c.l_max, c.k_max, c.alpha, c.interpolation_sigma)
+    radius = c.local_radius_action * float(np.sqrt(memory.action_dim))
+    return InverseModel(memory, c.inverse_model, c.l_max, c.k_max, c.alpha, radius,
+                        c.local_neighbours, c.local_step_fraction * radius)
+
+
+def region_tree_for(config: LearnerConfig, scale: WorldScale) -> RegionTree:
+    """The SAGG-RIAC region tree over the world's outcome box."""
+    c = config
+    return RegionTree(scale.low_array, scale.high_array, c.max_goals_per_region, c.zeta,
+                      c.min_goals_per_child, c.distances(scale).min_region_width,
+                      c.interest_noise_correction)
+
+
+def goal_mode_probabilities(config: LearnerConfig, learner: str) -> tuple[float, float, float]:
+    """SAGG-RIAC's three modes; random-goals draws every goal uniformly (mode 2)."""
+    if learner == "random-goals":
+        return UNIFORM_GOALS
+    return (config.p_mode1, config.p_mode2, config.p_mode3)
 
 
 def inverse_or_centre(model: InverseModel, goal: np.ndarray, action_dim: int) -> np.ndarray:
@@ -67,8 +89,13 @@ class Learner:
     social = False
 
     def __init__(self, action_dim: int, outcome_dim: int, seed: int,
-                 config: LearnerConfig | None = None) -> None:
+                 config: LearnerConfig | None = None, scale: WorldScale | None = None) -> None:
         self.config = config or LearnerConfig()
+        if scale is None:
+            raise ValueError("a learner needs the world's scale (outcome box and noise)")
+        if scale.dim != outcome_dim:
+            raise ValueError(f"world scale has {scale.dim} outcome numbers, not {outcome_dim}")
+        self.scale = scale
         self.action_dim = action_dim
         self.outcome_dim = outcome_dim
         self.rngs = RandomStreams.from_seed(seed)
@@ -136,24 +163,25 @@ class DemoOnlyLearner(Learner):
 
 
 class GoalBabblingLearner(Learner):
-    """SAGG-RIAC; with ``social=True`` it is SGIM-D."""
+    """SAGG-RIAC; with ``social=True`` it is SGIM-D; with ``name="random-goals"`` its goals
+    are uniform in the outcome box (the region tree still records them, for the plots)."""
 
     name = "saggriac"
 
     def __init__(self, action_dim: int, outcome_dim: int, seed: int,
-                 config: LearnerConfig | None = None, social: bool = False) -> None:
-        super().__init__(action_dim, outcome_dim, seed, config)
+                 config: LearnerConfig | None = None, scale: WorldScale | None = None,
+                 social: bool = False, name: str | None = None) -> None:
+        super().__init__(action_dim, outcome_dim, seed, config, scale)
         c = self.config
         self.social = social
-        self.name = "sgim-d" if social else "saggriac"
-        self.origin = origin_vector(c.origin, outcome_dim)
-        self.tree = RegionTree(np.full(outcome_dim, OUTCOME_LOW),
-                               np.full(outcome_dim, OUTCOME_HIGH), c.max_goals_per_region,
-                               c.zeta, c.min_goals_per_child, c.min_region_width)
-        self.selector = GoalSelector(self.tree, (c.p_mode1, c.p_mode2, c.p_mode3),
-                                     c.mode3_radius)
+        self.name = name or ("sgim-d" if social else "saggriac")
+        self.tree = region_tree_for(c, self.scale)
+        self.probe_scale = probe_scale_for(c, self.scale, action_dim)
+        self.selector = GoalSelector(self.tree, goal_mode_probabilities(c, self.name),
+                                     c.distances(self.scale).mode3_radius)
         self.process: GoalAttempt | Imitation | None = None
-        self.pending_demos: deque[tuple[np.ndarray, np.ndarray]] = deque()
+        # (action, outcome, memory's distance to the outcome before it was stored)
+        self.pending_demos: deque[tuple[np.ndarray, np.ndarray, float]] = deque()
         self.last_goal_mode = 0
         self.n_goals = 0
 
@@ -162,20 +190,21 @@ class GoalBabblingLearner(Learner):
             return
         a = np.asarray(action, dtype=float).copy()
         y = np.asarray(outcome, dtype=float).copy()
+        before = start_distance(self.memory.closest_distance(y), y, self.scale.centre)
         self.memory.add(a, y, DEMONSTRATION)
-        self.pending_demos.append((a, y))
+        self.pending_demos.append((a, y, before))
 
     def _new_process(self) -> GoalAttempt | Imitation:
         c = self.config
         if self.pending_demos:
-            a, y = self.pending_demos.popleft()
+            a, y, before = self.pending_demos.popleft()
             if c.imitation_count > 0:
                 return Imitation(a, y, c.imitation_count, c.imitation_epsilon,
-                                 self.rngs.imitation)
+                                 self.rngs.imitation, start_distance=before)
         choice = self.selector.sample(self.rngs.goals)
         self.last_goal_mode = choice.mode
-        return GoalAttempt(choice.goal, self.memory, self.inverse_model, c, self.rngs.explorer,
-                           self.action_dim)
+        return GoalAttempt(choice.goal, self.memory, self.inverse_model, c, self.scale,
+                           self.rngs.explorer, self.action_dim, self.probe_scale)
 
     def next_action(self) -> tuple[np.ndarray, str]:
         if self.pending_demos and isinstance(self.process, GoalAttempt) and not self.process.done:
@@ -199,7 +228,7 @@ class GoalBabblingLearner(Learner):
         arbiter cancels the explorer's job): the goal's competence is what it reached so far."""
         attempt = self.process
         if attempt.movements > 0:
-            self._record_competence(attempt.goal, attempt.best_outcome)
+            self._record_competence(attempt)
         self.process = None
 
     def _after_observe(self, action: np.ndarray, result: ResultLike) -> None:
@@ -208,28 +237,29 @@ class GoalBabblingLearner(Learner):
             return
         p.observe(action, result)
         if p.done:
-            self._record_competence(p.goal, p.best_outcome)
+            self._record_competence(p)
 
-    def _record_competence(self, goal: np.ndarray, best_outcome: np.ndarray | None) -> float:
-        """Competence of the attempt from its closest outcome (-1 if every movement failed)."""
-        if best_outcome is None:
-            comp = -1.0
-        else:
-            comp = competence(goal, best_outcome, self.origin, self.config.eps_sim)
-        self.tree.add(goal, comp)
+    def _record_competence(self, process: GoalAttempt | Imitation) -> float:
+        """Competence of the attempt (or imitation) against memory before it (competence.py)."""
+        d = self.config.distances(self.scale)
+        reference = (process.start_distance if self.config.competence_reference == "memory"
+                     else d.competence_radius)
+        comp = competence(process.goal, process.best_outcome, reference, d.success_tolerance)
+        self.tree.add(process.goal, comp)
         self.n_goals += 1
         return comp
 
 
 def make_learner(name: str, action_dim: int, outcome_dim: int, seed: int,
-                 config: LearnerConfig | None = None) -> Learner:
-    """Build one of LEARNER_NAMES; `seed` fixes every random stream (see random_streams)."""
-    if name == "sgim-d":
-        return GoalBabblingLearner(action_dim, outcome_dim, seed, config, social=True)
-    if name == "saggriac":
-        return GoalBabblingLearner(action_dim, outcome_dim, seed, config, social=False)
+                 config: LearnerConfig | None = None,
+                 scale: WorldScale | None = None) -> Learner:
+    """Build one of LEARNER_NAMES; `seed` fixes every random stream (see random_streams);
+    `scale` is the world's (its outcome box and noise, scale.py)."""
+    if name in GOAL_BABBLERS:
+        return GoalBabblingLearner(action_dim, outcome_dim, seed, config, scale,
+                                   social=name == "sgim-d", name=name)
     if name == "demo-only":
-        return DemoOnlyLearner(action_dim, outcome_dim, seed, config)
+        return DemoOnlyLearner(action_dim, outcome_dim, seed, config, scale)
     if name == "random":
-        return RandomLearner(action_dim, outcome_dim, seed, config)
+        return RandomLearner(action_dim, outcome_dim, seed, config, scale)
     raise ValueError(f"unknown learner {name!r}; choose one of {LEARNER_NAMES}")

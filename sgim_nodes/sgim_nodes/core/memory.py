@@ -100,6 +100,21 @@ class Memory:
         ind = np.take_along_axis(ind, order, axis=1)
         return (dist[0], ind[0]) if single else (dist, ind)
 
+    def nearest_actions(self, action: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """The min(k, len) stored actions nearest to ``action`` (Euclidean, in action space):
+        (distances (k,), indices (k,)), sorted, ties by index.  Brute force: at 5000 pairs of
+        24 numbers one query is ~0.1 ms, and the action space has too many dimensions for a
+        KD-tree to prune."""
+        k = min(k, self._n)
+        if k <= 0:
+            return np.empty(0), np.empty(0, dtype=int)
+        diff = self._actions[: self._n] - np.asarray(action, dtype=float)
+        d2 = np.einsum("ij,ij->i", diff, diff)
+        idx = np.argpartition(d2, k - 1)[:k] if k < self._n else np.arange(self._n)
+        order = np.lexsort((idx, d2[idx]))
+        idx = idx[order]
+        return np.sqrt(d2[idx]), idx
+
     def closest_distance(self, point: np.ndarray) -> float:
         """Distance from a point to the closest stored outcome (inf when empty)."""
         if self._n == 0:

@@ -93,21 +93,21 @@ def snapshot(tree: RegionTree, ids: RegionIds, goal_count: int) -> RegionSnapsho
         region = queue.pop(0)
         if region.children is None:
             continue
-        inner.append(_summary(region, ids, parents[id(region)], tree.zeta))
+        inner.append(_summary(region, ids, parents[id(region)], tree))
         for child in region.children:
             parents[id(child)] = ids(region)
             queue.append(child)
-    leaves = [_summary(leaf, ids, parents[id(leaf)], tree.zeta) for leaf in tree.leaves]
+    leaves = [_summary(leaf, ids, parents[id(leaf)], tree) for leaf in tree.leaves]
     return RegionSnapshot(inner + leaves, goal_count, len(inner))
 
 
-def _summary(region: Region, ids: RegionIds, parent: int, zeta: int) -> RegionSummary:
+def _summary(region: Region, ids: RegionIds, parent: int, tree: RegionTree) -> RegionSummary:
     least = None
     if region.goals:
         least = np.array(region.goals[int(np.argmin(region.competences))], dtype=float)
-    return RegionSummary(ids(region), parent, region.low.copy(), region.high.copy(),
-                         region.interest(zeta) if region.is_leaf else 0.0, _goal_count(region),
-                         region.is_leaf, least)
+    interest = region.interest(tree.zeta, tree.noise_correction) if region.is_leaf else 0.0
+    return RegionSummary(ids(region), parent, region.low.copy(), region.high.copy(), interest,
+                         _goal_count(region), region.is_leaf, least)
 
 
 def _goal_count(region: Region) -> int:

@@ -4,6 +4,12 @@ Interest (paper eq. 2) is the absolute change of competence over the last zeta g
 region: |sum(older half) - sum(newer half)| / zeta.  Regions split once they hold more than
 ``max_goals`` goals, at the cut maximising the difference of interest of the two children,
 so that the tree separates where the learner progresses from where it does not.
+
+Noise: with 10 goals per half, the difference of two half-sums is mostly sampling noise when
+competences scatter (measured: shuffling a leaf's window gave as much interest as its real
+order, docs/learners.md). ``noise_correction`` c removes from the difference of the halves'
+means c standard errors of that difference, so a window whose halves differ by no more than
+their own scatter has no interest; c = 0 is the paper's formula.
 """
 
 from __future__ import annotations
@@ -13,12 +19,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
-def interest(competences: np.ndarray | list[float], zeta: int) -> float:
+def interest(competences: np.ndarray | list[float], zeta: int,
+             noise_correction: float = 0.0) -> float:
     """Eq. 2 on the last zeta competences (chronological order, newest last).
 
     With fewer than zeta values we use the largest even number m of the newest ones, still
     divided by zeta: two equal halves keep a constant competence at zero interest, and the
-    1/zeta factor damps interest estimated from few goals.
+    1/zeta factor damps interest estimated from few goals.  With ``noise_correction`` c > 0,
+    |sum(older) - sum(newer)| becomes h * max(0, |mean(older) - mean(newer)| - c * se), se the
+    standard error of the difference of the two half means of h values each.
     """
     c = np.asarray(competences, dtype=float)
     m = min(len(c), zeta)
@@ -26,8 +35,13 @@ def interest(competences: np.ndarray | list[float], zeta: int) -> float:
     if m == 0:
         return 0.0
     window = c[len(c) - m:]
-    older, newer = window[: m // 2], window[m // 2:]
-    return float(abs(older.sum() - newer.sum()) / zeta)
+    h = m // 2
+    older, newer = window[:h], window[h:]
+    gap = abs(older.mean() - newer.mean())
+    if noise_correction > 0.0 and h >= 2:
+        se = np.sqrt((older.var(ddof=1) + newer.var(ddof=1)) / h)
+        gap = max(0.0, gap - noise_correction * se)
+    return float(h * gap / zeta)
 
 
 @dataclass(eq=False)  # identity comparison: regions are tree nodes
@@ -51,8 +65,8 @@ class Region:
     def volume(self) -> float:
         return float(np.prod(self.high - self.low))
 
-    def interest(self, zeta: int) -> float:
-        return interest(self.competences, zeta)
+    def interest(self, zeta: int, noise_correction: float = 0.0) -> float:
+        return interest(self.competences, zeta, noise_correction)
 
     def contains(self, point: np.ndarray) -> bool:
         return bool(np.all(point >= self.low) and np.all(point <= self.high))
@@ -68,7 +82,8 @@ class SplitChoice:
 
 
 def best_split(goals: np.ndarray, competences: np.ndarray, low: np.ndarray, high: np.ndarray,
-               zeta: int, min_per_child: int, min_width: float) -> SplitChoice | None:
+               zeta: int, min_per_child: int, min_width: float,
+               noise_correction: float = 0.0) -> SplitChoice | None:
     """The cut maximising |interest(left) - interest(right)| (left: coordinate < value).
 
     Candidates: every midpoint between consecutive distinct sorted coordinates of the goals,
@@ -90,7 +105,8 @@ def best_split(goals: np.ndarray, competences: np.ndarray, low: np.ndarray, high
             n_left = int(left.sum())
             if n_left < min_per_child or n - n_left < min_per_child:
                 continue
-            score = abs(interest(competences[left], zeta) - interest(competences[~left], zeta))
+            score = abs(interest(competences[left], zeta, noise_correction)
+                        - interest(competences[~left], zeta, noise_correction))
             key = (round(score, 12), -abs(2 * n_left - n))
             if best_key is None or key > best_key:
                 best_key = key
@@ -103,12 +119,14 @@ class RegionTree:
     leaf containing the goal."""
 
     def __init__(self, low: np.ndarray, high: np.ndarray, max_goals: int, zeta: int,
-                 min_per_child: int = 5, min_width: float = 0.05) -> None:
+                 min_per_child: int = 5, min_width: float = 0.05,
+                 noise_correction: float = 0.0) -> None:
         self.root = Region(np.array(low, dtype=float), np.array(high, dtype=float))
         self.max_goals = max_goals
         self.zeta = zeta
         self.min_per_child = min_per_child
         self.min_width = min_width
+        self.noise_correction = noise_correction
         self._leaves: list[Region] = [self.root]
 
     @property
@@ -134,7 +152,8 @@ class RegionTree:
 
     def _split(self, leaf: Region) -> None:
         choice = best_split(np.array(leaf.goals), np.array(leaf.competences), leaf.low,
-                            leaf.high, self.zeta, self.min_per_child, self.min_width)
+                            leaf.high, self.zeta, self.min_per_child, self.min_width,
+                            self.noise_correction)
         if choice is None:
             # No valid cut (e.g. every goal on one point): retry once the region grew by half,
             # so a stuck region does not cost a full search on every goal.
@@ -156,4 +175,5 @@ class RegionTree:
         self._leaves[i:i + 1] = [left, right]
 
     def interests(self) -> np.ndarray:
-        return np.array([leaf.interest(self.zeta) for leaf in self._leaves])
+        return np.array([leaf.interest(self.zeta, self.noise_correction)
+                         for leaf in self._leaves])

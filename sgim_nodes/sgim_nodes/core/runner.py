@@ -26,11 +26,12 @@ from .config import LearnerConfig
 from .environment import Environment, is_success
 from .evaluator import EVALUATION_SEED_OFFSET, Evaluator
 from .learners import LEARNER_NAMES, Learner, make_learner
-from .planar_arm import PlanarArm, benchmark_goals, teaching_set
+from .planar_arm import ARMS, PlanarArm, benchmark_goals, teaching_set
 from .random_streams import component_rng
-from .teaching import Teacher
+from .scale import WorldScale, unit_box
+from .teaching import DEFAULT_TOLERANCE_NOISE, Teacher
 
-ENV_NAMES = ("fishing", "planar-arm")
+ENV_NAMES = ("fishing", "planar-arm", *ARMS)
 EVALUATION = "evaluation"
 
 
@@ -41,27 +42,44 @@ class World:
     goals: np.ndarray
     teaching_actions: np.ndarray | None
     teaching_outcomes: np.ndarray | None
+    scale: WorldScale
+
+
+def fishing_scale() -> WorldScale:
+    """The fishing world's outcome box and its measured noise (sim_bridge.scaling)."""
+    from sim_bridge import scaling
+
+    return unit_box(scaling.OUTCOME_DIM, scaling.OUTCOME_NOISE)
 
 
 def build_world(name: str, seed: int, noise: float | None = None, arm_joints: int = 12,
                 arm_cells: int = 12, pond_radius: float | None = None) -> World:
     """Training world, a separate evaluation world, benchmark goals and the teaching set.
 
-    The fishing world and its data files are imported lazily: the planar-arm path needs none
-    of them.  The evaluation world gets its own seed so its noise stream is independent.
+    The fishing world and its data files are imported lazily: the analytic arms need none of
+    them.  The evaluation world gets its own seed so its noise stream is independent.
+    ``planar-arm`` is the small test arm (``arm_joints``, noise-free by default); ``arm-7``
+    and ``arm-20`` are the benchmark arms of planar_arm.ARMS.
     ``pond_radius`` (fishing only, metres): a world whose isolated pond is smaller
     (``sim_bridge.lake.Lake``); None keeps the world's default.  Its benchmark and teaching sets
     are read from the data directory as usual (point SIM_BRIDGE_DATA_DIR at sets built for it).
     """
-    if name == "planar-arm":
-        if pond_radius is not None:
-            raise ValueError("pond_radius applies to the fishing world only")
-        kw = {} if noise is None else {"noise": noise}
-        env = PlanarArm(n_joints=arm_joints, seed=seed, **kw)
-        eval_env = PlanarArm(n_joints=arm_joints, seed=seed + EVALUATION_SEED_OFFSET, **kw)
-        ts = teaching_set(env, cells=arm_cells)
-        return World(env, eval_env, benchmark_goals(env, cells=arm_cells), ts.actions,
-                     ts.outcomes)
+    if pond_radius is not None and name != "fishing":
+        raise ValueError("pond_radius applies to the fishing world only")
+    if name == "planar-arm" or name in ARMS:
+        if name == "planar-arm":
+            kw = {} if noise is None else {"noise": noise}
+            env = PlanarArm(n_joints=arm_joints, seed=seed, **kw)
+            eval_env = PlanarArm(n_joints=arm_joints, seed=seed + EVALUATION_SEED_OFFSET, **kw)
+            cells: int | tuple[int, int] = arm_cells
+        else:
+            spec = ARMS[name]
+            env = spec.make(seed, noise)
+            eval_env = spec.make(seed + EVALUATION_SEED_OFFSET, noise)
+            cells = spec.cells
+        ts = teaching_set(env, cells=cells)
+        return World(env, eval_env, benchmark_goals(env, cells=cells), ts.actions,
+                     ts.outcomes, env.scale)
     if name == "fishing":
         from sim_bridge.data_files import load_benchmark_goals, load_teaching_set
         from sim_bridge.fishing_world import FishingWorld
@@ -74,7 +92,8 @@ def build_world(name: str, seed: int, noise: float | None = None, arm_joints: in
         eval_world = FishingWorld(seed=seed + EVALUATION_SEED_OFFSET, **kw)
         return World(FishingWorld(seed=seed, **kw), eval_world,
                      np.asarray(load_benchmark_goals(), dtype=float),
-                     np.asarray(ts.actions, dtype=float), np.asarray(ts.outcomes, dtype=float))
+                     np.asarray(ts.actions, dtype=float), np.asarray(ts.outcomes, dtype=float),
+                     fishing_scale())
     raise ValueError(f"unknown env {name!r}; choose one of {ENV_NAMES}")
 
 
@@ -84,7 +103,7 @@ def _vec(x: np.ndarray | None) -> list[float] | None:
 
 def run(learner: Learner, world: World, movements: int, eval_every: int,
         seed: int, write: Callable[[dict[str, Any]], None],
-        teacher_period: int = 150, teacher_tolerance: float = 0.05,
+        teacher_period: int = 150, teacher_tolerance_noise: float = DEFAULT_TOLERANCE_NOISE,
         progress: Callable[[int], None] | None = None) -> list[float]:
     """Drive ``learner`` for ``movements`` movements; returns the evaluation means.
 
@@ -95,8 +114,8 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
     if learner.social and world.teaching_actions is not None:
         teacher = Teacher(world.teaching_actions, world.teaching_outcomes,
                           component_rng(seed, "teacher"), teacher_period,
-                          teacher_tolerance)
-    evaluator = Evaluator(world.eval_env, world.goals)
+                          teacher_tolerance_noise * world.scale.noise)
+    evaluator = Evaluator(world.eval_env, world.goals, world.scale.diagonal)
     means: list[float] = []
 
     def evaluate(count: int) -> None:
@@ -138,7 +157,8 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--seed", type=int, default=0,
                    help="seed of every random draw of the run (default: %(default)s)")
     p.add_argument("--env", choices=ENV_NAMES, default="planar-arm",
-                   help="world: 'fishing' needs sim_bridge; 'planar-arm' is analytic "
+                   help="world: 'fishing' needs sim_bridge; 'planar-arm' (the small test "
+                        "arm), 'arm-7' and 'arm-20' (the benchmark arms) are analytic "
                         "(default: %(default)s)")
     p.add_argument("--eval-every", type=int, default=250,
                    help="evaluate every N movements, 0 = only at start and end; the paper "
@@ -150,7 +170,7 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                    help="fishing: radius in metres of the isolated pond (default: the world's "
                         "own, 0.95); benchmark and teaching sets come from SIM_BRIDGE_DATA_DIR")
     p.add_argument("--arm-joints", type=int, default=12,
-                   help="planar arm: number of joints (default: %(default)s)")
+                   help="planar-arm: number of joints (default: %(default)s)")
     p.add_argument("--teacher-period", type=int, default=150,
                    help="movements between demonstrations, paper: 150 (default: %(default)s)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -176,7 +196,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     config = LearnerConfig()
     learner = make_learner(args.learner, world.env.action_dim, world.env.outcome_dim,
-                           args.seed, config)
+                           args.seed, config, world.scale)
     args.output.parent.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
     with args.output.open("w") as f, tqdm(total=args.movements, disable=args.quiet,
@@ -191,6 +211,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                                        else {"pond_radius": args.pond_radius}),
                "action_dim": world.env.action_dim,
                "outcome_dim": world.env.outcome_dim, "n_goals": len(world.goals),
+               "scale": {"low": list(world.scale.low), "high": list(world.scale.high),
+                         "noise": world.scale.noise},
                "config": config.to_dict()})
         means = run(learner, world, args.movements, args.eval_every, args.seed, write,
                     args.teacher_period, progress=bar.update)

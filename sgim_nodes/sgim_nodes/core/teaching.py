@@ -17,6 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 
 PAPER_PERIOD = 150
+DEFAULT_TOLERANCE_NOISE = 1.0
+"""A teaching goal counts as reached within this many units of the world's outcome noise:
+closer than the noise, two outcomes cannot be told apart."""
 
 
 @dataclass(frozen=True)

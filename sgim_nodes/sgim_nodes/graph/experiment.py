@@ -31,7 +31,7 @@ from typing import Any
 import yaml
 
 from sgim_nodes.bag.resume import next_segment, segments
-from sgim_nodes.core.learners import LEARNER_NAMES
+from sgim_nodes.core.learners import GOAL_BABBLERS, LEARNER_NAMES
 from sgim_nodes.graph.domain import isolated_ros_environment, reserve_domain
 from sgim_nodes.graph.processes import ProcessGroup
 
@@ -52,7 +52,7 @@ def nodes_for(learner: str, teacher: str) -> list[tuple[str, str]]:
     """(package, executable) of every node the learner needs, the arbiter last."""
     nodes = [("sgim_nodes", "recorder"), ("sim_bridge", "sim_bridge"),
              ("sgim_nodes", "evaluator")]
-    if learner in ("sgim-d", "saggriac"):
+    if learner in GOAL_BABBLERS:
         nodes += [("sgim_nodes", "interest_computer"), ("sgim_nodes", "goal_generator"),
                   ("sgim_nodes", "low_level_explorer")]
     if learner in SOCIAL:

@@ -27,7 +27,7 @@ from sgim_nodes.core.evaluator import EVALUATION_SEED_OFFSET, Evaluator
 from sgim_nodes.core.inverse_model import InverseModel
 from sgim_nodes.core.learners import inverse_model_for, inverse_or_centre
 from sgim_nodes.nodes.movement_memory import MovementMemory
-from sgim_nodes.nodes.ros_glue import declare_learner, floats, run_node, vec
+from sgim_nodes.nodes.ros_glue import declare_learner, floats, run_node, vec, world_scale
 from sgim_ros import qos
 from sgim_ros.params import Param, non_negative
 from sim_bridge.data_files import load_benchmark_goals
@@ -48,7 +48,7 @@ class EvaluatorNode(Node):
         goals = load_benchmark_goals()
         self.world = FishingWorld(seed=values["seed"] + EVALUATION_SEED_OFFSET,
                                   noise=values["noise"])
-        self.evaluator = Evaluator(self.world, goals)
+        self.evaluator = Evaluator(self.world, goals, world_scale(values).diagonal)
         self.memory = MovementMemory(self, config, self.action_size, values["outcome_size"])
         self.memory.before_store.append(self._before_movement)
         self.memory.after_store.append(self._after_movement)

@@ -8,7 +8,8 @@ Interfaces:
   subscribes  region_map  (sgim_msgs/RegionMap)
   publishes   goals       (sgim_msgs/Goal)
   serves      choose_goal (sgim_msgs/srv/ChooseGoal)
-Parameters: the common ones, p_mode1..3 and mode3_radius of LearnerConfig, map_timeout.
+Parameters: the common ones, p_mode1..3 and mode3_radius_noise of LearnerConfig, map_timeout.
+The random-goals learner draws every goal uniformly (mode 2).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from sgim_msgs.msg import Goal, RegionMap
 from sgim_msgs.srv import ChooseGoal
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.core.goal_selection import GoalSelector
+from sgim_nodes.core.learners import goal_mode_probabilities
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.core.region_snapshot import RegionSnapshot
 from sgim_nodes.nodes.ros_glue import (
@@ -28,6 +30,7 @@ from sgim_nodes.nodes.ros_glue import (
     floats,
     run_node,
     snapshot_from_msg,
+    world_scale,
 )
 from sgim_ros import qos
 from sgim_ros.entry import first_of
@@ -45,8 +48,8 @@ class GoalGenerator(AsyncNode):
         ))
         self.timeout = values["map_timeout"]
         self.rng = component_rng(values["seed"], "goals")
-        self.probabilities = (c.p_mode1, c.p_mode2, c.p_mode3)
-        self.radius = c.mode3_radius
+        self.probabilities = goal_mode_probabilities(c, values["learner"])
+        self.radius = c.distances(world_scale(values)).mode3_radius
         self.snapshot: RegionSnapshot | None = None
         self.goal_count = 0
         if values["resume_from"]:

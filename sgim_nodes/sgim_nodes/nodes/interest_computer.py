@@ -13,15 +13,21 @@ Parameters: the common ones and the region-tree ones of LearnerConfig (see READM
 
 from __future__ import annotations
 
-import numpy as np
 from rclpy.node import Node
 
 from sgim_msgs.msg import Competence, RegionMap
 from sgim_nodes.bag.resume import resume_point
-from sgim_nodes.core.competence import OUTCOME_HIGH, OUTCOME_LOW
+from sgim_nodes.core.learners import region_tree_for
 from sgim_nodes.core.region_snapshot import RegionIds, snapshot
 from sgim_nodes.core.region_tree import RegionTree
-from sgim_nodes.nodes.ros_glue import check_vector, declare_learner, region_map_msg, run_node, vec
+from sgim_nodes.nodes.ros_glue import (
+    check_vector,
+    declare_learner,
+    region_map_msg,
+    run_node,
+    vec,
+    world_scale,
+)
 from sgim_ros import qos
 
 
@@ -30,9 +36,7 @@ class InterestComputer(Node):
         super().__init__("interest_computer")
         values, c = declare_learner(self)
         self.outcome_size = values["outcome_size"]
-        self.tree = RegionTree(np.full(self.outcome_size, OUTCOME_LOW),
-                               np.full(self.outcome_size, OUTCOME_HIGH), c.max_goals_per_region,
-                               c.zeta, c.min_goals_per_child, c.min_region_width)
+        self.tree: RegionTree = region_tree_for(c, world_scale(values))
         self.ids = RegionIds()
         self.goal_count = 0
         if values["resume_from"]:

@@ -22,9 +22,9 @@ from sgim_msgs.action import ReachGoal
 from sgim_msgs.msg import Competence
 from sgim_msgs.srv import ExecuteAction, RegisterDemonstration
 from sgim_nodes.bag.resume import resume_point
-from sgim_nodes.core.competence import competence, origin_vector
+from sgim_nodes.core.competence import competence, start_distance
 from sgim_nodes.core.environment import MovementResult
-from sgim_nodes.core.goal_reaching import GoalAttempt
+from sgim_nodes.core.goal_reaching import GoalAttempt, probe_scale_for
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.nodes.movement_memory import MovementMemory
 from sgim_nodes.nodes.ros_glue import (
@@ -36,6 +36,7 @@ from sgim_nodes.nodes.ros_glue import (
     floats,
     run_node,
     vec,
+    world_scale,
 )
 from sgim_nodes.nodes.sim_client import SERVICE_TIMEOUT, SimClient
 from sgim_ros import qos
@@ -49,7 +50,9 @@ class LowLevelExplorer(AsyncNode):
         ))
         self.action_size, self.outcome_size = values["action_size"], values["outcome_size"]
         self.rng = component_rng(values["seed"], "explorer")
-        self.origin = origin_vector(self.config.origin, self.outcome_size)
+        self.scale = world_scale(values)
+        self.distances = self.config.distances(self.scale)
+        self.probe_scale = probe_scale_for(self.config, self.scale, self.action_size)
         self.memory = MovementMemory(self, self.config, self.action_size, self.outcome_size)
         if values["resume_from"]:
             self.memory.resume(resume_point(values["resume_from"], self.config,
@@ -62,8 +65,13 @@ class LowLevelExplorer(AsyncNode):
     def _register(self, request: RegisterDemonstration.Request,
                   response: RegisterDemonstration.Response):
         demo = request.demonstration
-        why = self.memory.add_demonstration(vec(demo.action), vec(demo.outcome))
+        outcome = vec(demo.outcome)
+        before = self.memory.memory.closest_distance(outcome) if outcome.shape == (
+            self.outcome_size,) else float("inf")
+        why = self.memory.add_demonstration(vec(demo.action), outcome)
         response.accepted, response.message = not why, why
+        if not why:
+            response.closest_distance = start_distance(before, outcome, self.scale.centre)
         if why:
             self.get_logger().error(f"refused demonstration {demo.index}: {why}")
         return response
@@ -79,7 +87,7 @@ class LowLevelExplorer(AsyncNode):
         await self.memory.reached(request.movements_before)
         goal = vec(request.goal)
         attempt = GoalAttempt(goal, self.memory.memory, self.memory.inverse_model, self.config,
-                              self.rng, self.action_size)
+                              self.scale, self.rng, self.action_size, self.probe_scale)
         used = 0
         while not attempt.done:
             if handle.is_cancel_requested:
@@ -101,8 +109,11 @@ class LowLevelExplorer(AsyncNode):
         result.movements_used = used
         result.reached = floats(attempt.best_outcome)
         if attempt.best_outcome is not None:
-            result.competence = competence(goal, attempt.best_outcome, self.origin,
-                                           self.config.eps_sim)
+            reference = (attempt.start_distance
+                         if self.config.competence_reference == "memory"
+                         else self.distances.competence_radius)
+            result.competence = competence(goal, attempt.best_outcome, reference,
+                                           self.distances.success_tolerance)
         if used > 0:  # an attempted goal, even an interrupted one, counts for the interest
             self._competences.publish(Competence(
                 stamp=self.get_clock().now().to_msg(), goal_index=request.goal_index,

@@ -18,8 +18,10 @@ from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS  # noqa: F401 - for nodes
 from sgim_nodes.core.learners import LEARNER_NAMES
 from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
+from sgim_nodes.core.scale import WorldScale, unit_box
 from sgim_ros.entry import AsyncNode, run_node  # noqa: F401 - the nodes' shared entry point
-from sgim_ros.params import Param, ParameterError, declare, one_of
+from sgim_ros.params import Param, ParameterError, declare, one_of, positive
+from sim_bridge.scaling import OUTCOME_NOISE
 
 ACTION_SIZE = 24  # the fishing world's; a parameter of every node that checks sizes
 OUTCOME_SIZE = 2
@@ -85,6 +87,9 @@ COMMON_PARAMS = (
           lambda v: v >= 1, ">= 1"),
     Param("outcome_size", OUTCOME_SIZE, "numbers per outcome (the world's outcome size)",
           lambda v: v >= 1, ">= 1"),
+    Param("outcome_noise", OUTCOME_NOISE, "the world's outcome noise (the paper's measure, in "
+          "outcome units): every learner distance is a multiple of it (core/scale.py)",
+          positive, "> 0"),
     Param("resume_from", "", "run folder to resume: state is rebuilt from its recordings "
           "(see bag/resume.py); empty for a fresh run"),
     Param("resume_segments", 0, "how many of its recordings to read (0: all)",
@@ -93,14 +98,18 @@ COMMON_PARAMS = (
 
 
 def learner_params() -> tuple[Param, ...]:
-    """One ROS parameter per LearnerConfig field (origin excepted: the space's centre), with
-    the documented default; LearnerConfig itself checks the values together."""
+    """One ROS parameter per LearnerConfig field, with the documented default;
+    LearnerConfig itself checks the values together."""
     default = LearnerConfig()
     return tuple(
         Param(f.name, getattr(default, f.name), f"see LearnerConfig.{f.name} in core/config.py")
         for f in fields(LearnerConfig)
-        if f.name != "origin"
     )
+
+
+def world_scale(values: dict[str, Any]) -> WorldScale:
+    """The fishing world's outcome box [-1, 1]^outcome_size and its outcome noise."""
+    return unit_box(values["outcome_size"], values["outcome_noise"])
 
 
 def declare_learner(node: Node, extra: Sequence[Param] = ()) -> tuple[dict[str, Any],

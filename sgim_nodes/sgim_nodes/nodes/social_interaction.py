@@ -37,7 +37,8 @@ from sgim_msgs.msg import Competence, Demonstration, Evaluation, Movement, RunSt
 from sgim_msgs.srv import ChooseGoal, ExecuteAction, RecorderReady, RegisterDemonstration
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.bag.types import TOPICS as RECORD_TOPICS
-from sgim_nodes.core.competence import competence, origin_vector
+from sgim_nodes.core.competence import competence
+from sgim_nodes.core.learners import GOAL_BABBLERS
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.nodes.ros_glue import (
     AsyncNode,
@@ -46,13 +47,13 @@ from sgim_nodes.nodes.ros_glue import (
     floats,
     run_node,
     vec,
+    world_scale,
 )
 from sgim_nodes.nodes.sim_client import SERVICE_TIMEOUT, SimClient
 from sgim_ros import qos
 from sgim_ros.entry import first_of
 from sgim_ros.params import Param, non_negative, one_of, positive
 
-GOAL_BABBLERS = ("sgim-d", "saggriac")
 SOCIAL = ("sgim-d", "demo-only")
 
 
@@ -88,7 +89,7 @@ class SocialInteraction(AsyncNode):
         self.sync_period = values["demonstration_period"] if (
             social and values["teacher"] == "automatic") else 0
         self.social = social
-        self.origin = origin_vector(self.config.origin, values["outcome_size"])
+        self.distances = self.config.distances(world_scale(values))
         self.rng = component_rng(values["seed"], "random")
         self.count = 0
         self.goals_folded = 0  # competences published so far (by the explorer and by us)
@@ -281,8 +282,11 @@ class SocialInteraction(AsyncNode):
             goal = vec(demo.outcome)
             comp = -1.0
             if len(result.best_outcome):
-                comp = competence(goal, vec(result.best_outcome), self.origin,
-                                  self.config.eps_sim)
+                reference = (reply.closest_distance
+                             if self.config.competence_reference == "memory"
+                             else self.distances.competence_radius)
+                comp = competence(goal, vec(result.best_outcome), reference,
+                                  self.distances.success_tolerance)
             self._competences.publish(Competence(
                 stamp=self.get_clock().now().to_msg(), goal_index=0,
                 movement_index=self.count, goal=floats(goal), reached=result.best_outcome,

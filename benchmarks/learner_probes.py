@@ -1,0 +1,135 @@
+"""Probes that look inside a goal-babbling learner while it runs, for the learner benchmarks.
+
+They answer the questions of issue 10 with measurements rather than final errors alone:
+- does a goal attempt gain on memory (end closer to its goal than memory's closest outcome
+  was before it)?
+- how often does the learner explore, and how far from what it knows are its goals?
+- is the interest signal or noise (real interest against the interest of each leaf's window
+  in shuffled order)?
+- do mode-1 goals avoid space that no movement can reach?
+Nothing here changes what the learner does: the probe only reads the finished processes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from sgim_nodes.core.goal_reaching import GoalAttempt
+from sgim_nodes.core.imitation import Imitation
+from sgim_nodes.core.learners import GoalBabblingLearner
+from sgim_nodes.core.region_tree import interest
+
+
+@dataclass
+class AttemptRecord:
+    movement: int  # the learner's movement count when the attempt ended
+    mode: int  # goal mode (1, 2, 3), 4 for a demonstration's imitation
+    goal: np.ndarray
+    explore: bool
+    start_distance: float
+    best_distance: float
+    movements: int
+    competence: float
+
+
+@dataclass
+class Probe:
+    """Attach to a GoalBabblingLearner; records every finished attempt and imitation."""
+
+    learner: GoalBabblingLearner
+    attempts: list[AttemptRecord] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        original = self.learner._record_competence
+        learner = self.learner
+
+        def record(process: GoalAttempt | Imitation) -> float:
+            comp = original(process)
+            is_attempt = isinstance(process, GoalAttempt)
+            self.attempts.append(AttemptRecord(
+                learner.n_movements, learner.last_goal_mode if is_attempt else 4,
+                np.asarray(process.goal, float).copy(), is_attempt and process.explore,
+                float(process.start_distance), float(process.best_distance),
+                process.movements, comp))
+            return comp
+
+        learner._record_competence = record  # type: ignore[method-assign]
+
+    def summary(self, frame: int, total: int, unreachable: ReachMap | None) -> dict:
+        goal_attempts = [a for a in self.attempts if a.mode != 4]
+        exploit = [a for a in goal_attempts if not a.explore and np.isfinite(a.start_distance)]
+        gains = np.array([a.start_distance - a.best_distance for a in exploit])
+        out: dict = {
+            "n_goals": len(goal_attempts),
+            "explore_share": float(np.mean([a.explore for a in goal_attempts]))
+            if goal_attempts else float("nan"),
+            "gain_mean": float(gains.mean()) if len(gains) else float("nan"),
+            "gain_positive_share": float((gains > 0).mean()) if len(gains) else float("nan"),
+            "start_distance_mean": float(np.mean([a.start_distance for a in exploit]))
+            if exploit else float("nan"),
+            "best_distance_mean": float(np.mean([a.best_distance for a in exploit]))
+            if exploit else float("nan"),
+        }
+        real, shuffled, corr = interest_against_shuffled(self.learner)
+        out.update(interest_real=real, interest_shuffled=shuffled, interest_corr=corr)
+        if unreachable is not None:
+            shares = []
+            for start in range(0, total, frame):
+                goals = [a.goal for a in goal_attempts
+                         if a.mode == 1 and start < a.movement <= start + frame]
+                shares.append(unreachable.share(np.array(goals)) if goals else float("nan"))
+            out["mode1_unreachable_share"] = shares
+            out["unreachable_area_share"] = unreachable.area_share
+        return out
+
+
+def interest_against_shuffled(learner: GoalBabblingLearner, repeats: int = 20,
+                              seed: int = 0) -> tuple[float, float, float]:
+    """Mean interest over leaves: real, with each leaf's last-zeta window shuffled (mean of
+    ``repeats`` shuffles), and the correlation of the two across leaves. Equal real and
+    shuffled means the order of competences (progress) adds nothing over their scatter."""
+    tree = learner.tree
+    rng = np.random.default_rng(seed)
+    real, shuffled = [], []
+    for leaf in tree.leaves:
+        window = np.asarray(leaf.competences[-tree.zeta:], float)
+        if len(window) < 4:
+            continue
+        real.append(interest(window, tree.zeta, tree.noise_correction))
+        shuffled.append(np.mean([interest(rng.permutation(window), tree.zeta,
+                                          tree.noise_correction) for _ in range(repeats)]))
+    if len(real) < 3:
+        return float("nan"), float("nan"), float("nan")
+    r, s = np.array(real), np.array(shuffled)
+    corr = float(np.corrcoef(r, s)[0, 1]) if r.std() > 0 and s.std() > 0 else float("nan")
+    return float(r.mean()), float(s.mean()), corr
+
+
+@dataclass(frozen=True)
+class ReachMap:
+    """Cells of a grid over the outcome box that a dense sample of movements never reached."""
+
+    low: np.ndarray
+    high: np.ndarray
+    reached: np.ndarray  # (cells, cells) bool
+
+    @property
+    def area_share(self) -> float:
+        """Share of the box's area no movement reaches."""
+        return float(1.0 - self.reached.mean())
+
+    def share(self, points: np.ndarray) -> float:
+        """Share of the points that fall in never-reached cells."""
+        n = self.reached.shape[0]
+        ij = np.clip(((points - self.low) / (self.high - self.low) * n).astype(int), 0, n - 1)
+        return float(1.0 - self.reached[ij[:, 0], ij[:, 1]].mean())
+
+    @classmethod
+    def from_outcomes(cls, outcomes: np.ndarray, low, high, cells: int = 40) -> ReachMap:
+        low, high = np.asarray(low, float), np.asarray(high, float)
+        reached = np.zeros((cells, cells), bool)
+        ij = np.clip(((outcomes - low) / (high - low) * cells).astype(int), 0, cells - 1)
+        reached[ij[:, 0], ij[:, 1]] = True
+        return cls(low, high, reached)

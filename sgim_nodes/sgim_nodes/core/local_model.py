@@ -1,0 +1,79 @@
+"""A linear model of the world fitted inside ONE consistent action neighbourhood.
+
+In a redundant action space (24 numbers for 2 outcome numbers) outcomes near a goal come from
+many unrelated actions; a model that averages them lands somewhere else (issue 10 measured
+60 % of the final error coming from that). A linear model is only meaningful around one
+action: we fit y ~ b + J (a - a_c) on the stored pairs within ``radius`` of a_c IN ACTION SPACE,
+with Gaussian weights of standard deviation radius / 2 and a small ridge on J.
+
+What it is good for, measured in docs/learners.md: ``b``, the outcome the model predicts AT a_c,
+averages the noise of every cast around a_c (a stored outcome carries the world's full noise),
+so the inverse model can rank candidate actions by where they really land rather than by where
+they once landed by luck. The slope J is poorly determined from memory (the pairs around an
+action lie along a few directions, with noise as large as the outcome changes: its cosine to
+the true Jacobian was 0.1 on the 20-joint arm); the ridge keeps it small off those directions.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .memory import Memory
+
+RIDGE = 1e-2
+"""Ridge on J relative to the mean weighted squared action offset: J stays defined (and small)
+in the directions the neighbourhood does not span."""
+MIN_PAIRS = 3
+"""Fewer pairs than this within the radius: no fit (the candidate's own outcome is used)."""
+
+
+@dataclass(frozen=True)
+class LocalFit:
+    centre: np.ndarray  # the action the model is linearised at
+    outcome: np.ndarray  # b: the predicted outcome at the centre (a noise-averaged estimate)
+    jacobian: np.ndarray  # J, (outcome_dim, action_dim)
+    n_effective: float  # (sum w)^2 / sum w^2: how many casts the estimate averages
+    residual: float  # weighted rms residual (noise plus curvature), in outcome units
+
+
+def fit(memory: Memory, centre: np.ndarray, radius: float, max_pairs: int) -> LocalFit | None:
+    """The local linear model around ``centre`` from the (at most ``max_pairs``) stored actions
+    within ``radius`` of it; None when fewer than MIN_PAIRS are that close."""
+    dist, idx = memory.nearest_actions(centre, max_pairs)
+    keep = dist <= radius
+    dist, idx = dist[keep], idx[keep]
+    if len(idx) < MIN_PAIRS:
+        return None
+    centre = np.asarray(centre, dtype=float)
+    x = memory.actions[idx] - centre
+    y = memory.outcomes[idx]
+    w = np.exp(-0.5 * (dist / (0.5 * radius)) ** 2)
+    sw = np.sqrt(w)[:, None]
+    n_act = x.shape[1]
+    design = np.hstack([np.ones((len(idx), 1)), x]) * sw
+    spread = float((w[:, None] * x**2).sum() / w.sum())
+    lam = RIDGE * max(spread, 1e-12)
+    ridge_rows = np.hstack([np.zeros((n_act, 1)), np.sqrt(lam) * np.eye(n_act)])
+    beta, *_ = np.linalg.lstsq(np.vstack([design, ridge_rows]),
+                               np.vstack([y * sw, np.zeros((n_act, y.shape[1]))]), rcond=None)
+    b, jac = beta[0], beta[1:].T
+    resid = y - (b + x @ jac.T)
+    rms = float(np.sqrt((w * (resid**2).sum(1)).sum() / w.sum()))
+    return LocalFit(centre, b, jac, float(w.sum() ** 2 / (w**2).sum()), rms)
+
+
+def step(model: LocalFit, goal: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """The action the model says reaches ``goal``, no farther than ``radius`` from its centre
+    (and clipped to [-1, 1]), with the outcome the model predicts for it."""
+    jac = model.jacobian
+    gap = np.asarray(goal, dtype=float) - model.outcome
+    gram = jac @ jac.T
+    mu = 1e-9 * max(float(np.trace(gram)), 1e-12)
+    delta = jac.T @ np.linalg.solve(gram + mu * np.eye(len(gram)), gap)
+    norm = float(np.linalg.norm(delta))
+    if norm > radius > 0.0:
+        delta *= radius / norm
+    action = np.clip(model.centre + delta, -1.0, 1.0)
+    return action, model.outcome + jac @ (action - model.centre)
