@@ -13,8 +13,8 @@ lower level and the interest (learner_probes.py): gain of goal attempts on memor
 share, real against shuffled interest, and the share of mode-1 goals in never-reachable space
 per 500-movement frame against that space's share of the box.
 
-``--goals validation`` evaluates on a second goal set (another seed and a grid shifted by half a
-cell): parameters are chosen there, and reported on the benchmark set, never tuned on it.
+``--goals validation`` evaluates on a second goal set (other points of the same grid cells):
+parameters are chosen there, and reported on the benchmark set, never tuned on it.
 
 Run:  .venv/bin/python benchmarks/bench_learners.py                      (all, ~15 min on 2 cores)
       .venv/bin/python benchmarks/bench_learners.py --seeds 3 --movements 2000 --worlds arm-20
@@ -32,7 +32,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import stats
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(REPO / "sgim_nodes"), str(REPO / "benchmarks")]
@@ -41,65 +41,106 @@ from learner_probes import Probe, ReachMap  # noqa: E402
 
 from sgim_nodes.core.config import LearnerConfig  # noqa: E402
 from sgim_nodes.core.learners import GoalBabblingLearner, make_learner  # noqa: E402
-from sgim_nodes.core.planar_arm import ARMS, _pose_pool, benchmark_goals  # noqa: E402
+from sgim_nodes.core.planar_arm import ARMS, reach_of  # noqa: E402
 from sgim_nodes.core.runner import World, build_world, run  # noqa: E402
 
 LEARNERS = ("random", "random-goals", "saggriac", "sgim-d")
+WORLDS = (*ARMS, "fishing")
 FRAME = 500
 
 
-def goals_for(world: World, name: str, kind: str) -> np.ndarray:
-    if kind == "benchmark":
-        return world.goals
-    # validation: another pool and a grid shifted by half a cell
-    return benchmark_goals(world.env, ARMS[name].cells, seed=7, offset=0.5)
+GOAL_SEEDS = {"benchmark": 0, "validation": 7}
+
+
+def goals_for(name: str, kind: str) -> tuple[np.ndarray | None, np.ndarray]:
+    """(actions, goals): one reachable point per reachable cell of the arm's benchmark grid
+    with the posture that reaches it exactly; ``validation`` draws other points of the cells.
+    Fishing: its packaged benchmark goals (no validation set: nothing is tuned on fishing)."""
+    if name == "fishing":
+        if kind != "benchmark":
+            raise SystemExit("the fishing world has no validation goals: nothing is tuned on it")
+        from sim_bridge.data_files import load_benchmark_goals
+
+        return None, np.asarray(load_benchmark_goals(), float)
+    spec = ARMS[name]
+    return reach_of(spec.make(0, noise=0.0), spec.cells, GOAL_SEEDS[kind]).reached_points()
 
 
 def reach_map(name: str) -> ReachMap:
-    """Never-reachable cells of the arm's box, from 300,000 postures of every kind."""
+    """Never-reachable cells of the arm's box on a 40 x 40 grid (planar_arm.reachable_cells:
+    random postures, then least squares flooding out from them); for fishing, the cells whose
+    centre is on land (no cast ever lands there)."""
+    if name == "fishing":
+        from sim_bridge.lake import is_water
+        from sim_bridge.scaling import outcome_to_world
+
+        centres = (np.stack(np.meshgrid(np.arange(40), np.arange(40), indexing="ij"), -1)
+                   + 0.5) / 40 * 2.0 - 1.0
+        water = is_water(outcome_to_world(centres.reshape(-1, 2))).reshape(40, 40)
+        return ReachMap(np.full(2, -1.0), np.full(2, 1.0), water)
     arm = ARMS[name].make(0, noise=0.0)
-    rng = np.random.default_rng(11)
-    poses = np.vstack([_pose_pool(arm, 200_000, rng),
-                       rng.uniform(-1, 1, (100_000, arm.action_dim))])
-    return ReachMap.from_outcomes(arm.forward(poses), *arm.box)
+    reached = reach_of(arm, 40).reached
+    return ReachMap(np.asarray(arm.box[0], float), np.asarray(arm.box[1], float), reached)
 
 
-def floor(name: str, goals: np.ndarray, casts: int = 50) -> tuple[float, np.ndarray]:
-    """Per goal: the best action found by least squares on the noise-free arm (from the 8
-    nearest of 50,000 postures), cast ``casts`` times with the arm's noise; mean distance."""
-    spec = ARMS[name]
-    arm = spec.make(0, noise=0.0)
-    noisy = spec.make(123)
-    rng = np.random.default_rng(5)
-    pool = _pose_pool(arm, 50_000, rng)
-    reach = arm.forward(pool)
-    per_goal = np.empty(len(goals))
-    for i, g in enumerate(goals):
-        starts = pool[np.argsort(((reach - g) ** 2).sum(1))[:8]]
-        best, best_err = starts[0], np.inf
-        for x0 in starts:
-            res = optimize.least_squares(lambda a, g=g: arm.forward(a) - g, x0,
-                                         bounds=(-1.0, 1.0))
-            err = float(np.linalg.norm(arm.forward(res.x) - g))
-            if err < best_err:
-                best, best_err = res.x, err
-        per_goal[i] = np.mean([np.linalg.norm(noisy.execute(best).outcome - g)
-                               for _ in range(casts)])
+def floor(name: str, kind: str, casts: int = 100) -> tuple[float, np.ndarray]:
+    """Per goal: the posture that reaches it exactly on the noise-free arm, cast ``casts`` times
+    with the arm's noise; the mean distance (for Gaussian noise, about 1.25 sigma). Fishing: the
+    floor shipped with its benchmark set (a nearest-action lookup on a dense map of the world,
+    cast with noise; sim_bridge.data_files.load_floor), NaN if the data has none."""
+    if name == "fishing":
+        try:
+            from sim_bridge.data_files import load_floor
+        except ImportError:
+            return float("nan"), np.empty(0)
+        per_goal = np.asarray(load_floor(), float).ravel()
+        return float(per_goal.mean()), per_goal
+    noisy = ARMS[name].make(123)
+    actions, goals = goals_for(name, kind)
+    per_goal = np.array([np.mean([np.linalg.norm(noisy.execute(a).outcome - g)
+                                  for _ in range(casts)]) for a, g in zip(actions, goals,
+                                                                          strict=True)])
     return float(per_goal.mean()), per_goal
+
+
+def same_memory_line(world: World, learner, name: str, casts: int = 2) -> dict[str, float]:
+    """The learner's final memory evaluated with its inverse model and with the plain nearest
+    neighbour, on the same goals: noise-free on the arms (exact), ``casts`` casts per goal in a
+    fresh evaluation world on fishing (the same seed for both models)."""
+    from sgim_nodes.core.evaluator import EVALUATION_SEED_OFFSET, Evaluator
+    from sgim_nodes.core.inverse_model import InverseModel
+    from sgim_nodes.core.learners import inverse_model_for
+
+    models = {"ours": inverse_model_for(learner.memory, learner.config),
+              "nearest": InverseModel(learner.memory, "nearest")}
+    out = {}
+    for label, model in models.items():
+        if name in ARMS:
+            arm = ARMS[name].make(0, noise=0.0)
+            out[label] = float(np.mean([np.linalg.norm(arm.forward(model(g)) - g)
+                                        for g in world.goals]))
+        else:
+            fresh = build_world(name, 10_000 + EVALUATION_SEED_OFFSET)
+            ev = Evaluator(fresh.eval_env, world.goals, world.scale.diagonal)
+            out[label] = float(np.mean([ev.evaluate(model).mean_distance
+                                        for _ in range(casts)]))
+    return out
 
 
 def run_one(job: tuple) -> dict:
     name, learner_name, seed, movements, eval_every, goal_kind, overrides = job
     config = LearnerConfig(**overrides)
     world = build_world(name, seed)
-    world.goals = goals_for(world, name, goal_kind)
+    world.goals = goals_for(name, goal_kind)[1]
     learner = make_learner(learner_name, world.env.action_dim, world.env.outcome_dim, seed,
                            config, world.scale)
     probe = Probe(learner) if isinstance(learner, GoalBabblingLearner) else None
     start = time.perf_counter()
     curve = run(learner, world, movements, eval_every, seed, lambda record: None)
     out = {"world": name, "learner": learner_name, "seed": seed, "curve": curve,
-           "final": curve[-1], "seconds": time.perf_counter() - start}
+           "final": curve[-1], "seconds": time.perf_counter() - start,
+           "n_demonstrations": learner.memory.labels.count("demonstration"),
+           "same_memory": same_memory_line(world, learner, name)}
     if probe is not None:
         out["probe"] = probe.summary(FRAME, movements, REACH[name])
     return out
@@ -146,6 +187,16 @@ def report(results: list[dict], floors: dict[str, float], movements: int,
             m, h = interval(finals[lr])
             print(f"  {lr:14s} {m:.4f} +- {h:.4f} (n={len(finals[lr])})  "
                   f"{m / floors[name]:.2f} x floor")
+        print("the same final memories, our inverse model against the nearest neighbour "
+              "(noise-free on the arms, 2 casts per goal on fishing):")
+        for lr in learners:
+            same = [r["same_memory"] for r in rows if r["learner"] == lr]
+            ours, near = (np.array([m[k] for m in same]) for k in ("ours", "nearest"))
+            print(f"  {lr:14s} ours {ours.mean():.4f}, nearest {near.mean():.4f}; ours no worse "
+                  f"in {int(np.sum(ours <= near))}/{len(ours)} runs")
+        demos = [r["n_demonstrations"] for r in rows if r["learner"] == "sgim-d"]
+        if demos:
+            print(f"demonstrations per sgim-d run: {demos}")
         print("Welch tests (two-sided p):")
         for a, b in (("random-goals", "random"), ("saggriac", "random"),
                      ("saggriac", "random-goals"), ("sgim-d", "saggriac")):
@@ -216,7 +267,8 @@ def parse_set(items: list[str]) -> dict:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--worlds", nargs="+", choices=list(ARMS), default=list(ARMS))
+    p.add_argument("--worlds", nargs="+", choices=WORLDS, default=list(ARMS),
+                   help="analytic arms by default; 'fishing' runs the pybullet world (slow)")
     p.add_argument("--learners", nargs="+", choices=LEARNERS, default=list(LEARNERS))
     p.add_argument("--seeds", type=int, default=10)
     p.add_argument("--movements", type=int, default=5000)
@@ -232,8 +284,7 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     floors = {}
     for name in args.worlds:
-        world = build_world(name, 0)
-        floors[name], _ = floor(name, goals_for(world, name, args.goals))
+        floors[name], _ = floor(name, args.goals)
     jobs = [(w, lr, s, args.movements, args.eval_every, args.goals, overrides)
             for w in args.worlds for lr in args.learners for s in range(args.seeds)]
     print(f"{len(jobs)} runs on {args.jobs} processes, goals: {args.goals}, overrides: "

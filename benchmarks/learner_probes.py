@@ -122,14 +122,8 @@ class ReachMap:
 
     def share(self, points: np.ndarray) -> float:
         """Share of the points that fall in never-reached cells."""
-        n = self.reached.shape[0]
-        ij = np.clip(((points - self.low) / (self.high - self.low) * n).astype(int), 0, n - 1)
+        n = np.array(self.reached.shape)
+        ij = np.clip(np.floor((points - self.low) / (self.high - self.low) * n).astype(int), 0,
+                     n - 1)
         return float(1.0 - self.reached[ij[:, 0], ij[:, 1]].mean())
 
-    @classmethod
-    def from_outcomes(cls, outcomes: np.ndarray, low, high, cells: int = 40) -> ReachMap:
-        low, high = np.asarray(low, float), np.asarray(high, float)
-        reached = np.zeros((cells, cells), bool)
-        ij = np.clip(((outcomes - low) / (high - low) * cells).astype(int), 0, cells - 1)
-        reached[ij[:, 0], ij[:, 1]] = True
-        return cls(low, high, reached)

@@ -1,9 +1,10 @@
 """teacher: the automatic teacher, one demonstration every P movements.
 
-It follows the learner through the movement stream (reached outcomes and count) and, at the
-run's start and at every P-th movement, publishes a demonstration drawn by the core Teacher
-among the teaching-set goals the learner has not reached, or an empty one when every goal is
-reached, so that an arbiter waiting at that boundary goes on. Its random stream "teacher"
+It follows the learner through the movement stream (the outcomes of its own movements, see
+core/teaching.py, and the count) and, at the run's start and at every P-th movement, publishes
+a demonstration drawn by the core Teacher among the teaching-set goals the learner has not
+reached by itself, or an empty one when every goal is reached, so that an arbiter waiting at
+that boundary goes on. Its random stream "teacher"
 makes its choices those of the single-process runner for the same seed.
 
 Interfaces:
@@ -19,13 +20,21 @@ from rclpy.node import Node
 
 from sgim_msgs.msg import Demonstration, Movement, RunStatus
 from sgim_nodes.bag.resume import resume_point
+from sgim_nodes.core.environment import PROCESS_CODES
 from sgim_nodes.core.random_streams import component_rng
-from sgim_nodes.core.teaching import DEFAULT_TOLERANCE_NOISE, PAPER_PERIOD, Teacher
+from sgim_nodes.core.teaching import (
+    DEFAULT_TOLERANCE_NOISE,
+    OWN_PROCESSES,
+    PAPER_PERIOD,
+    Teacher,
+)
 from sgim_nodes.nodes.ros_glue import floats, run_node, vec
 from sgim_ros import qos
 from sgim_ros.params import Param, declare, non_negative, positive
 from sim_bridge.data_files import load_teaching_set
 from sim_bridge.scaling import OUTCOME_NOISE
+
+OWN_CODES = {PROCESS_CODES[label] for label in OWN_PROCESSES}
 
 
 class TeacherNode(Node):
@@ -57,7 +66,7 @@ class TeacherNode(Node):
         self.answered: set[int] = set()
         if p["resume_from"]:
             point = resume_point(p["resume_from"], limit=p["resume_segments"])
-            self.reached = list(point.reached_outcomes)
+            self.reached = list(point.own_outcomes)
             self.count, self.answered = point.count, set(point.demonstration_turns)
             self.given = point.demonstrations_given
         self._out = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
@@ -73,7 +82,7 @@ class TeacherNode(Node):
     def _on_movement(self, msg: Movement) -> None:
         if msg.process == Movement.PROCESS_EVALUATION or msg.index <= self.count:
             return
-        if msg.status == Movement.STATUS_OK:
+        if msg.status == Movement.STATUS_OK and msg.process in OWN_CODES:
             self.reached.append(vec(msg.outcome))
         self.count = msg.index
         self._maybe_teach()
@@ -91,7 +100,6 @@ class TeacherNode(Node):
                             teaching_set_index=-1, source="automatic")
         if demo is not None:
             self.given += 1
-            self.reached.append(demo.outcome)  # the learner stores it as its own experience
             msg.index, msg.teaching_set_index = self.given, demo.index
             msg.action, msg.outcome = floats(demo.action), floats(demo.outcome)
             self.get_logger().info(f"demonstration {self.given} at movement {k}: entry "

@@ -56,3 +56,38 @@ def test_invalid_teacher():
         Teacher(ACTIONS, OUTCOMES[:2], np.random.default_rng(0))
     with pytest.raises(ValueError):
         Teacher(ACTIONS, OUTCOMES, np.random.default_rng(0), period=0)
+
+
+def test_a_demonstrated_goal_stays_unreached_until_the_learners_own_movements_reach_it():
+    from sgim_nodes.core.learners import make_learner
+    from sgim_nodes.core.planar_arm import PlanarArm
+
+    arm = PlanarArm(seed=0)
+    learner = make_learner("sgim-d", 12, 2, 0, None, arm.scale)
+    goal_action = np.full(12, 0.3)
+    goal = arm.forward(goal_action)
+    t = Teacher(np.array([goal_action]), np.array([goal]), np.random.default_rng(0),
+                tolerance=0.01)
+    learner.on_demonstration(goal_action, goal)
+    for _ in range(learner.config.imitation_count):  # the imitations land on the goal too
+        a, label = learner.next_action()
+        assert label == "imitation"
+        learner.observe(a, arm.execute(a))
+    assert t.choose(learner.own_outcomes()) is not None  # still unreached: shown again
+    learner.memory.add(goal_action, goal, "goal_directed")  # its own goal-directed cast
+    assert t.choose(learner.own_outcomes()) is None
+
+
+def test_the_runner_keeps_teaching_while_a_goal_is_unreached():
+    import json
+
+    from sgim_nodes.core import runner
+
+    world = runner.build_world("planar-arm", 0)
+    learner = runner.make_learner("sgim-d", 12, 2, 0, None, world.scale)
+    records: list[dict] = []
+    runner.run(learner, world, 600, 0, 0, records.append, teacher_period=50,
+               teacher_tolerance_noise=0.01)  # a tolerance too tight to ever reach
+    demos = [r for r in records if r["type"] == "demonstration"]
+    assert [d["movement"] for d in demos] == list(range(0, 600, 50))
+    assert json.dumps(demos[0])  # plain JSON

@@ -23,6 +23,7 @@ from sgim_nodes.bag.reader import load_run, superseded_removed
 from sgim_nodes.bag.rebuild import RebuiltState, rebuild_from_records
 from sgim_nodes.bag.records import RunRecords
 from sgim_nodes.core.config import LearnerConfig
+from sgim_nodes.core.teaching import OWN_PROCESSES
 
 FIRST_SEGMENT = "bag"
 _RESUMED = re.compile(r"^bag\.resume(\d+)$")
@@ -93,6 +94,12 @@ class ResumePoint:
     @property
     def reached_outcomes(self) -> np.ndarray:
         return self.state.memory.outcomes
+
+    @property
+    def own_outcomes(self) -> np.ndarray:
+        """Outcomes of the learner's own movements (core/teaching.py OWN_PROCESSES)."""
+        labels = np.asarray(self.state.memory.labels)
+        return self.state.memory.outcomes[np.isin(labels, OWN_PROCESSES)]
 
 
 def resume_point(run_dir: str | Path, config: LearnerConfig | None = None,

@@ -36,6 +36,7 @@ from .memory import Memory
 from .random_streams import RandomStreams
 from .region_tree import RegionTree
 from .scale import WorldScale
+from .teaching import OWN_PROCESSES
 
 RANDOM = "random"
 DEMONSTRATION = "demonstration"
@@ -129,6 +130,12 @@ class Learner:
 
     def reached_outcomes(self) -> np.ndarray:
         return self.memory.outcomes
+
+    def own_outcomes(self) -> np.ndarray:
+        """Outcomes of the learner's own movements (OWN_PROCESSES: not the demonstrations,
+        not the imitations): what the teacher judges "reached" on."""
+        labels = np.asarray(self.memory.labels)
+        return self.memory.outcomes[np.isin(labels, OWN_PROCESSES)]
 
     _last_label = ""
 

@@ -128,7 +128,7 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
             evaluate(i)
         if teacher is not None and teacher.due(i):
             learner.on_teacher_turn()
-            demo = teacher.choose(learner.reached_outcomes())
+            demo = teacher.choose(learner.own_outcomes())
             if demo is not None:
                 learner.on_demonstration(demo.action, demo.outcome)
                 write({"type": "demonstration", "movement": i, "teaching_index": demo.index,
@@ -217,10 +217,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         means = run(learner, world, args.movements, args.eval_every, args.seed, write,
                     args.teacher_period, progress=bar.update)
         write({"type": "end", "final_mean_distance": means[-1], "n_memory": len(learner.memory),
+               "n_demonstrations": learner.memory.labels.count("demonstration"),
                "n_failures": learner.n_failures, "elapsed_s": time.perf_counter() - start})
     if not args.quiet:
-        print(f"{args.learner}: final mean distance {means[-1]:.4f} -> {args.output}",
-              file=sys.stderr)
+        demos = learner.memory.labels.count("demonstration")
+        print(f"{args.learner}: final mean distance {means[-1]:.4f}, {demos} demonstrations "
+              f"-> {args.output}", file=sys.stderr)
     return 0
 
 

@@ -1,12 +1,21 @@
 """The automatic teacher's logic, without ROS.
 
-Every ``period`` movements (P = 150 in the paper) the teacher gives one demonstration
-(action, outcome) drawn at random, with its own seeded Generator, among the teaching-set
-outcomes the learner has NOT yet reached within ``tolerance``: demonstrating what the learner
-already masters would waste the teacher's time.  When every teaching goal is reached it
-returns None and gives nothing at that period; since reached outcomes never disappear from the
-learner's memory, the teacher then stays silent for the rest of the run and the SGIM-D learner
-simply continues as SAGG-RIAC.
+The paper (Nguyen et al. 2011, section IV): "the teacher gives a demonstration at constant
+frequency, and randomly selects it from a set of demonstrations", "a random demonstration
+among the unreached goals", the teacher knowing the learner's state. So every ``period``
+movements (P = 150) the teacher gives one demonstration (action, outcome) drawn at random, with
+its own seeded Generator, among the teaching-set outcomes the learner has NOT reached.
+
+"Reached" is judged on what the learner can do by itself: a teaching goal is reached once one
+of the learner's OWN movements (goal-directed, exploration or random: ``OWN_PROCESSES``) lands
+within ``tolerance`` of it. Never the stored demonstration (it is in the learner's memory the
+moment it is shown, so judging on memory made every demonstrated goal reached at once and the
+teacher fell silent after about 1000 movements), and not the imitations either (repeating the
+teacher's action is not yet reaching the goal on one's own; the learner has integrated a
+demonstration once its own goal-directed movements land there). A demonstrated goal can thus be
+shown again until the learner reaches it itself. The tolerance is a multiple of the world's
+outcome noise (``DEFAULT_TOLERANCE_NOISE``). When every goal is reached the teacher gives
+nothing at that turn.
 """
 
 from __future__ import annotations
@@ -17,6 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 
 PAPER_PERIOD = 150
+OWN_PROCESSES = ("goal_directed", "exploration", "random")
+"""Process labels of the movements that show what the learner can do by itself."""
 DEFAULT_TOLERANCE_NOISE = 1.0
 """A teaching goal counts as reached within this many units of the world's outcome noise:
 closer than the noise, two outcomes cannot be told apart."""
