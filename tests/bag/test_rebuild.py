@@ -24,8 +24,8 @@ def _direct(messages, n_parts_lost: int = 0):
     for topic, msg in messages:
         if topic == "movements" and msg.status == 0:
             memory.add(msg.action, msg.outcome)
-        elif topic == "demonstrations":
-            memory.add(msg.action, msg.outcome)  # published just before movement k + 1
+        elif topic == "demonstrations_taken":
+            memory.add(msg.action, msg.outcome)  # taken just before movement k + 1
         elif topic == "competences":
             tree.add(msg.goal, msg.competence)
     return memory, tree

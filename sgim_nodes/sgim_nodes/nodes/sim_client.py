@@ -2,8 +2,10 @@
 
 A learning run must not lose or double a movement when the simulator node dies: if no answer
 comes within the timeout, the client waits for the service to come back and sends the same
-request again, unless the movement was in fact executed and recorded before the crash (then
-the recorded result is used, so the movement is counted once).
+request again with `attempt` + 1, unless the movement was in fact executed and recorded before
+the crash (then the recorded result is used, so the movement is counted once). The record of a
+re-execution carries its attempt number: it supersedes the earlier record of the same index
+for every node and every bag reader (bag/validation.py), never "the last record wins".
 """
 
 from __future__ import annotations
@@ -44,6 +46,10 @@ class SimClient:
                     if response.status == Movement.STATUS_INVALID_ACTION:
                         raise SimulatorError(response.message)
                     return response
+                # Sent but unanswered: a new call executes the movement again, and its record
+                # says so, so that every node and reader takes that later record as the one
+                # the learner used (bag/validation.py).
+                request.attempt = min(request.attempt + 1, 255)
             else:
                 await self._sleep(0.2)
             movement = self.recorded(request.movement_index) if self.recorded else None
