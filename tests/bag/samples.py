@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from sgim_nodes.bag.types import TOPICS, typestore
-from sgim_nodes.bag.writer import SplitBagWriter
+from sgim_nodes.bag.writer import BagWriter
 
 TS = typestore()
 T = TS.types
@@ -110,8 +110,8 @@ def synthetic_run(n: int = 60, seed: int = 0) -> list[tuple[str, object]]:
 
 
 def write_bag(path: Path, messages: list[tuple[str, object]], **writer_kwargs) -> Path:
-    """Write (topic, message) pairs with the split writer, topics as '/name'."""
-    bag = SplitBagWriter(path, **writer_kwargs)
+    """Write (topic, message) pairs with the bag writer, topics as "/name"."""
+    bag = BagWriter(path, **writer_kwargs)
     for topic, msgtype in TOPICS.items():
         bag.add_topic(f"/{topic}", msgtype)
     for k, (topic, msg) in enumerate(messages):

@@ -31,7 +31,7 @@ def test_replay_at_a_high_rate_delivers_everything(ros_processes, client, tmp_pa
     from sgim_nodes.nodes.recorder import ros_message_class, topic_qos
 
     messages = samples.synthetic_run(120, seed=3)
-    bag = samples.write_bag(tmp_path / "run", messages, split_messages=50)
+    bag = samples.write_bag(tmp_path / "run", messages, chunk_messages=50)
     received = {name: client.capture(ros_message_class(t), f"/{name}",
                                      topic_qos(name, keep_all=True))
                 for name, t in TOPICS.items()}

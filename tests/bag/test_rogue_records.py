@@ -36,7 +36,7 @@ def _run_folder(tmp_path, messages, budget=N):
     run.mkdir(parents=True)
     (run / "params.yaml").write_text(yaml.safe_dump({"/**": {"ros__parameters": {
         "movements": budget, "action_size": 24, "outcome_size": 2}}}))
-    samples.write_bag(run / "bag", messages, split_messages=40)
+    samples.write_bag(run / "bag", messages, chunk_messages=40)
     return run
 
 

@@ -1,9 +1,11 @@
 """Read a run's bag back in order, as plain Python records, tolerating a damaged part.
 
-A recorder killed mid-run leaves its bag as finished parts plus, possibly, an unfinished one
-(see bag.writer); a disk can also truncate a file. Analysis should get everything that is
-readable, with a warning naming each file it had to skip, rather than nothing. Each storage
-file is therefore opened on its own (rosbags' own multi-file reader fails as a whole).
+A recorder killed mid-run leaves its storage file without summary (see bag.writer): it is
+read up to its last complete chunk (bag.mcap_recovery); a disk can also truncate or damage a
+file. Analysis should get everything that is readable, with a warning naming each file it had
+to skip, rather than nothing. Each storage file is therefore opened on its own (rosbags' own
+multi-file reader fails as a whole); bags of the older layout, many small parts and staging
+folders, read the same way.
 Types come from the definitions embedded in the bag, so reading needs no ROS install.
 
   read_raw(path)        -> RawRecord(topic, msgtype, timestamp_ns, data) in order
@@ -31,9 +33,17 @@ from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
+from sgim_nodes.bag.mcap_recovery import RecoveryError, recover
 from sgim_nodes.bag.records import RECORD_TYPES, RunRecords, to_record
 from sgim_nodes.bag.types import TOPICS
-from sgim_nodes.bag.validation import Limits, Problem, RunValidator, summarise, teaching_set_size
+from sgim_nodes.bag.validation import (
+    LIMITS_KEY,
+    Limits,
+    Problem,
+    RunValidator,
+    summarise,
+    teaching_set_size,
+)
 from sgim_nodes.bag.writer import STAGING_PREFIX
 
 STORAGE_SUFFIXES = (".mcap", ".db3")
@@ -159,6 +169,11 @@ def _iter_raw(path: str | Path, files: list[Path], wanted: set[str] | None,
             reader = Reader(file)
             reader.open()
         except Exception as error:
+            if file.suffix == ".mcap" and not unfinished:
+                recovered = yield from _recover(file, wanted, on_gap, on_topic)
+                if recovered is not None:
+                    readable += 1
+                    continue
             why = ("an unfinished part (the recorder was stopped while writing it)"
                    if unfinished else "unreadable")
             warnings.warn(BagReadWarning(f"skipped {file}: {why}: {error}"), stacklevel=2)
@@ -177,12 +192,42 @@ def _iter_raw(path: str | Path, files: list[Path], wanted: set[str] | None,
         except Exception as error:
             warnings.warn(BagReadWarning(
                 f"{file} is damaged: read {count} messages, then: {error}"), stacklevel=2)
-            on_gap()
+            if file.suffix == ".mcap":  # the chunks after the damaged one may be fine
+                yield from _recover(file, wanted, on_gap, on_topic, skip=count)
+            else:
+                on_gap()
         finally:
             reader.close()
     if files and not readable and not all(_unfinished(f) for f in files):
         raise NotABagError(f"{path}: none of its {len(files)} storage files is readable "
                            f"({', '.join(f.name for f in files)})")
+
+
+def _recover(file: Path, wanted: set[str] | None, on_gap: Callable[[], None],
+             on_topic: Callable[[str], None], skip: int = 0) -> Iterator[RawRecord]:
+    """The complete, undamaged chunks of an MCAP file, past the first `skip` messages already
+    read; returns the number of messages read, or None when the file is no MCAP at all."""
+    damage: list[str] = []
+    count = 0
+    try:
+        for m in recover(file, on_gap=lambda why: (damage.append(why), on_gap())):
+            on_topic(m.topic)
+            if _wanted(m.topic, wanted):
+                count += 1
+                if count > skip:
+                    yield RawRecord(m.topic, m.msgtype, m.timestamp_ns, m.data, m.msgdef)
+    except (OSError, RecoveryError):
+        return None
+    skipped = f"; {len(damage)} damaged chunk(s) skipped" if damage else ""
+    if skip:
+        message = f"{file}: read on past the damage: {count - skip} more messages{skipped}"
+    else:
+        message = (f"{file} was not closed (its recorder was killed or could not write): read "
+                   f"{count} messages, up to its last complete chunk{skipped}. `repair "
+                   f"{file.parent}` rewrites it as a complete bag")
+    warnings.warn(BagReadWarning(message), stacklevel=3)
+    on_gap()  # whatever followed the last chunk is gone
+    return count
 
 
 def _unfinished(file: Path) -> bool:
@@ -227,10 +272,17 @@ def read_messages(path: str | Path, topics: Iterable[str] | None = None
 
 
 def limits_for(path: str | Path) -> Limits:
-    """The validation limits of the run a bag belongs to: its run folder's params.yaml (the
-    launcher's), else the fishing world's sizes, the packaged teaching set, budget unknown."""
+    """The validation limits of the run a bag belongs to: those its recorder validated with
+    (the bag's custom_data), else its run folder's params.yaml (the launcher's), else the
+    fishing world's sizes and the packaged teaching set, budget unknown."""
     path = Path(path)
-    for folder in (path, *path.parents[:2]):
+    bag = path.parent if path.is_file() else path
+    try:
+        info = _load_metadata(bag / "metadata.yaml")["rosbag2_bagfile_information"]
+        return Limits.from_json((info.get("custom_data") or {})[LIMITS_KEY])
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        pass
+    for folder in (bag, *bag.parents[:1]):
         params = folder / "params.yaml"
         if params.is_file():
             try:

@@ -21,10 +21,11 @@ never folds it into memory or statistics; the bag still holds it, so an audit se
 
 from __future__ import annotations
 
+import json
 import math
 from collections import Counter
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
@@ -42,6 +43,7 @@ GOAL_MODES = frozenset({1, 2, 3, 4})
 RUN_STATES = frozenset({0, 1, 2})
 SOURCES = frozenset({"automatic", "human"})
 MAX_ATTEMPT = 255  # Movement.attempt is a uint8
+LIMITS_KEY = "sgim_validation_limits"  # the recorder's limits, in a bag's custom_data
 
 
 @dataclass(frozen=True)
@@ -64,6 +66,14 @@ class Limits:
     outcome_size: int = 2
     budget: int = 0  # the run's movement budget
     teaching_set_size: int = 0
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self), sort_keys=True)
+
+    @classmethod
+    def from_json(cls, text: str) -> Limits:
+        values = json.loads(text)
+        return cls(**{k: int(v) for k, v in values.items() if k in cls.__dataclass_fields__})
 
     @classmethod
     def for_run(cls, params: Mapping[str, Any]) -> Limits:
@@ -94,6 +104,13 @@ def _values(values: Any) -> np.ndarray:
 def vector_problem(values: Any, size: int, what: str, bound: float | None = BOUND,
                    allow_empty: bool = False, allow_nan: bool = False) -> Problem | None:
     """Why a vector field is unusable, or None."""
+    try:  # the common case, fast: the recorder checks every message of a run
+        n = len(values)
+        if (n == size or (allow_empty and n == 0)) and bound is not None and all(
+                -bound <= x <= bound for x in values):
+            return None
+    except TypeError:
+        pass
     v = _values(values)
     if allow_empty and v.size == 0:
         return None
