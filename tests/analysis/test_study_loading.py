@@ -45,7 +45,7 @@ def test_second_load_uses_the_cache(study: Path, monkeypatch: pytest.MonkeyPatch
     def no_bag_reading(bag):
         raise AssertionError(f"{bag} read again although cached")
 
-    monkeypatch.setattr(study_module, "_read_bag", no_bag_reading)
+    monkeypatch.setattr(study_module, "_read_run", no_bag_reading)
     second = load_study(study)
     for a, b in zip(first.runs, second.runs, strict=True):
         np.testing.assert_array_equal(a.outcome, b.outcome)

@@ -10,6 +10,7 @@ neither a bag nor a run folder must say what it found instead.
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable
 from pathlib import Path
 
 from sgim_nodes.bag.reader import NotABagError, limits_for, load_run
@@ -42,8 +43,8 @@ def is_run_folder(path: str | Path) -> bool:
     return path.is_dir() and bool(segments(path))
 
 
-def load_run_folder(run_dir: str | Path, limit: int = 0, limits: Limits | None = None
-                    ) -> RunRecords:
+def load_run_folder(run_dir: str | Path, limit: int = 0, limits: Limits | None = None,
+                    topics: Iterable[str] | None = None) -> RunRecords:
     """Every valid record of a run across its recordings (the first `limit` ones if > 0: a
     resumed graph reads only those made before its own), as one RunRecords."""
     run_dir = Path(run_dir)
@@ -57,7 +58,7 @@ def load_run_folder(run_dir: str | Path, limit: int = 0, limits: Limits | None =
     validator = RunValidator(limits or limits_for(parts[0]))
     merged = RunRecords()
     for part in parts:
-        load_run(part, validator=validator, into=merged)
+        load_run(part, topics, validator=validator, into=merged)
     return merged
 
 
