@@ -63,10 +63,11 @@ def test_interest_computer_ignores_records_outside_the_space(ros_processes, clie
     maps = client.capture(RegionMap, "/region_map", qos.LATEST_STATE)
     publisher = client.node.create_publisher(Competence, "/competences", qos.RECORDS)
     assert client.spin_until(lambda: maps and publisher.get_subscription_count() > 0)
-    publisher.publish(Competence(goal=[2.0, 0.0], competence=-0.5))
-    publisher.publish(Competence(goal=[0.1, 0.1], competence=0.5))  # competence must be <= 0
-    publisher.publish(Competence(goal=[0.1], competence=-0.5))
-    publisher.publish(Competence(goal=[0.1, 0.1], competence=-0.5))
+    for goal, value in (([2.0, 0.0], -0.5), ([0.1, 0.1], 0.5),  # competence must be <= 0
+                        ([0.1], -0.5), ([0.1, 0.1, 0.1], -0.5), ([0.1, 0.1], float("nan")),
+                        ([0.1, 0.1], -1e300), ([float("inf"), 0.1], -0.5)):
+        publisher.publish(Competence(goal=goal, competence=value, movements_used=3))
+    publisher.publish(Competence(goal=[0.1, 0.1], competence=-0.5, movements_used=3))
     assert client.spin_until(lambda: maps[-1].goal_count >= 1)
     client.spin_for(0.5)
     assert maps[-1].goal_count == 1  # only the good record was folded in

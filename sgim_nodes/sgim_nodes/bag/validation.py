@@ -416,3 +416,41 @@ def summarise(quarantined: list[Quarantined], limit: int = 5) -> list[str]:
         lines.append(f"... and {len(quarantined) - limit} more: "
                      + ", ".join(f"{n} {what}" for what, n in counter.most_common()))
     return lines
+
+
+class LiveGate:
+    """What a live node does with each record it receives: the same checks as every reader,
+    the refusal logged with topic, index and reason (the first `log_limit`, then every 100th),
+    and a count. For movements, the run's own count (IndexSequence) decides duplicates and
+    jumps, as the readers decide them."""
+
+    def __init__(self, log: Any, limits: Limits, movement_count: int = 0,
+                 log_limit: int = 20) -> None:
+        self.log = log  # called with one line (e.g. a node logger's .error)
+        self.limits = limits
+        self.movements = IndexSequence("movement", movement_count)
+        self.quarantined = 0
+        self.log_limit = log_limit
+
+    def check(self, topic: str, record: Any) -> Problem | None:
+        """None when the record may be used; else the problem, already logged."""
+        problem = check(topic, record, self.limits)
+        if problem is not None:
+            self._refuse(topic, record, problem)
+        return problem
+
+    def admit_movement(self, record: Any) -> Verdict:
+        """A movement: checked, then placed in the run's count (new, re-execution, refused)."""
+        problem = check("movements", record, self.limits)
+        verdict = Verdict(problem) if problem else self.movements.admit(
+            record.index, getattr(record, "attempt", 0))
+        if verdict.problem is not None:
+            self._refuse("movements", record, verdict.problem)
+        return verdict
+
+    def _refuse(self, topic: str, record: Any, problem: Problem) -> None:
+        self.quarantined += 1
+        n = self.quarantined
+        if n <= self.log_limit or n % 100 == 0:
+            self.log(f"{topic} record {record_index(topic, record)} quarantined: "
+                     f"{problem.detail} (ignored; {n} so far)")

@@ -80,6 +80,9 @@ class LowLevelExplorer(AsyncNode):
         request: ReachGoal.Goal = handle.request
         result = ReachGoal.Result(competence=-1.0)
         why = check_vector(request.goal, self.outcome_size, "goal", bound=1.0)
+        if not why and request.movements_before < self.memory.count:
+            why = (f"the job starts after movement {request.movements_before}, but the run is "
+                   f"at movement {self.memory.count}: not this run's arbiter")
         if why:
             self.get_logger().error(f"refused goal {request.goal_index}: {why}")
             handle.abort()
