@@ -135,9 +135,21 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
     messages = [s.message for s in run.run_status]
     assert any("demonstration 999" in m and "refused" in m for m in messages), messages
     assert any("refused" in m and "waited" in m for m in messages), messages
-    # The bag holds everything received; the quarantine counts are beside it.
-    raw_movements = sum(1 for r in read_raw(run_dir / "bag") if r.topic == "/movements")
-    assert raw_movements == MOVEMENTS + 3 + 1 + 30
+    # The bag holds everything received, in one valid MCAP file that rosbags and the MCAP
+    # library read as they are; the quarantine counts are beside it.
+    raw = list(read_raw(run_dir / "bag"))
+    assert sum(1 for r in raw if r.topic == "/movements") == MOVEMENTS + 3 + 1 + 30
+    assert sorted(p.name for p in (run_dir / "bag").iterdir()) == ["bag.mcap", "metadata.yaml"]
+    from mcap.reader import make_reader
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([run_dir / "bag"]) as reader:
+        assert reader.message_count == len(raw)
+    with (run_dir / "bag" / "bag.mcap").open("rb") as stream:
+        mcap = make_reader(stream, validate_crcs=True)
+        assert sum(1 for _ in mcap.iter_messages()) == len(raw)
+        (embedded,) = [m.metadata["serialized_metadata"] for m in mcap.iter_metadata()]
+    assert "- bag.mcap" in embedded
     report = yaml.safe_load((run_dir / "bag.quarantine.yaml").read_text())
     q = report["quarantined"]
     assert q["movements"] == {"duplicate": 3, "beyond-budget": 1, "non-finite": 30}
