@@ -186,3 +186,24 @@ def test_rebuild_names_what_a_path_is_when_it_is_no_bag(tmp_path, capsys):
     assert "not a bag" in err and "no bag/" in err
     assert rebuild_main([str(tmp_path / "runs")]) == 2
     assert "not a bag" in capsys.readouterr().err
+
+
+def test_the_recorders_quarantine_reports_sum_up_over_a_runs_segments(tmp_path, clean):
+    from sgim_nodes.bag.run_folder import quarantine_summary
+
+    run = _run_folder(tmp_path, clean)
+    samples.write_bag(run / "bag.resume1", [])
+    samples.write_bag(run / "bag.resume2", [])
+    (run / "bag.quarantine.yaml").write_text(yaml.safe_dump({
+        "total_quarantined": 3, "quarantined": {"movements": {"duplicate": 2},
+                                                "competences": {"non-finite": 1}},
+        "write_error": None}))
+    (run / "bag.resume1.quarantine.yaml").write_text(yaml.safe_dump({
+        "total_quarantined": 1, "quarantined": {"movements": {"duplicate": 1}},
+        "write_error": "could not write a movements message: OSError: [Errno 28] No space"}))
+    assert quarantine_summary(run) == {
+        "total": 4, "by_topic": {"movements": {"duplicate": 3},
+                                 "competences": {"non-finite": 1}},
+        "write_errors": {"bag.resume1": "could not write a movements message: OSError: "
+                                        "[Errno 28] No space"},
+        "unreported": ["bag.resume2"]}

@@ -70,3 +70,33 @@ def load_records(path: str | Path) -> tuple[RunRecords, list[Path]]:
     if is_run_folder(path):
         return load_run_folder(path), segments(path)
     return load_run(path), [path]
+
+
+QUARANTINE_SUFFIX = ".quarantine.yaml"  # what the recorder writes beside each segment
+
+
+def quarantine_summary(run_dir: str | Path) -> dict:
+    """The recorders' reports of a run, summed over its segments, for metadata.yaml:
+    {"total": n, "by_topic": {topic: {kind: n}}, "write_errors": {segment: why}}, plus
+    "unreported": the segments whose recorder left no report (killed before its first)."""
+    import yaml
+
+    total, by_topic, errors, unreported = 0, {}, {}, []
+    for segment in segments(run_dir):
+        report_file = segment.with_name(segment.name + QUARANTINE_SUFFIX)
+        try:
+            report = yaml.safe_load(report_file.read_text(encoding="utf-8")) or {}
+        except (OSError, yaml.YAMLError):
+            unreported.append(segment.name)
+            continue
+        total += int(report.get("total_quarantined", 0) or 0)
+        for topic, kinds in (report.get("quarantined") or {}).items():
+            for kind, n in kinds.items():
+                by_topic.setdefault(topic, {})
+                by_topic[topic][kind] = by_topic[topic].get(kind, 0) + int(n)
+        if report.get("write_error"):
+            errors[segment.name] = report["write_error"]
+    summary: dict = {"total": total, "by_topic": by_topic, "write_errors": errors}
+    if unreported:
+        summary["unreported"] = unreported
+    return summary

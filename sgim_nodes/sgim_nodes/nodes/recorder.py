@@ -43,6 +43,7 @@ from rclpy.serialization import deserialize_message
 
 from sgim_msgs.msg import RunStatus
 from sgim_msgs.srv import RecorderReady
+from sgim_nodes.bag.run_folder import QUARANTINE_SUFFIX
 from sgim_nodes.bag.types import STATE_TOPICS, TOPICS
 from sgim_nodes.bag.validation import LIMITS_KEY, Limits, RunValidator, teaching_set_size
 from sgim_nodes.bag.writer import STORAGES, BagWriteError, BagWriter
@@ -52,7 +53,6 @@ from sgim_ros.params import Param, declare, non_negative, one_of, positive
 
 FINISH_LIMIT = 30.0  # seconds after the final status at which the recorder stops regardless
 WRITE_FAILED = 3  # exit code: the bag could not be written (the launcher fails the run)
-QUARANTINE_SUFFIX = ".quarantine.yaml"
 LOGGED_QUARANTINES = 20  # quarantined records logged one by one; then counted only
 PARAMS = (
     Param("output", "", "bag directory to create", lambda v: bool(v.strip()),
