@@ -371,9 +371,11 @@ class SocialInteraction(AsyncNode):
 
     def _refuse(self, demo: Demonstration, why: str, always: bool = False) -> None:
         """A demonstration the learner does not take: said in the log and on run_status
-        (a burst: the first 20 and every 100th, then a total at the end)."""
+        (a burst: the first 20 and every 100th, then a total at the end; one given once the
+        budget was spent, always)."""
         self.refused += 1
         line = f"demonstration {demo.index} ({demo.source}) refused: {why}"
+        always = always or demo.movement_index >= self.total  # a late one is always said
         if always or self.refused <= 20 or self.refused % 100 == 0:
             self.get_logger().warning(line + f" ({self.refused} refused so far)")
             self._publish_status(RunStatus.STATE_RUNNING, line)
