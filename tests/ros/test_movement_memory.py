@@ -34,3 +34,41 @@ def test_the_latest_pair_is_replaced_removed_or_added(n):
     assert replace_latest(memory, None, None) is None and len(memory) == n
     with pytest.raises(ValueError, match="latest"):
         replace_latest(memory, 0, new)
+
+
+def test_a_live_memory_keeps_the_re_execution_and_refuses_rogue_records(rclpy_context):
+    from sgim_msgs.msg import Movement
+    from sgim_nodes.core.config import LearnerConfig
+    from sgim_nodes.nodes.movement_memory import MovementMemory
+    from sgim_ros import qos
+    from tests.ros.graph_client import GraphClient
+
+    client = GraphClient(rclpy_context, "memory_test")
+    try:
+        memory = MovementMemory(client.node, LearnerConfig(), 24, 2)
+        pub = client.node.create_publisher(Movement, "/movements", qos.RECORDS)
+        assert client.spin_until(lambda: pub.get_subscription_count() > 0)
+
+        def movement(index, outcome, attempt=0, status=Movement.STATUS_OK):
+            return Movement(index=index, process=Movement.PROCESS_RANDOM, status=status,
+                            action=[0.1 * index] * 24, outcome=outcome, attempt=attempt)
+
+        sent = [movement(1, [0.1, 0.1]), movement(2, [0.2, 0.2]),
+                movement(3, [0.3, 0.3]),  # the dying simulator's record
+                movement(3, [0.35, 0.35], attempt=1),  # its re-execution: replaces it
+                movement(3, [0.9, 0.9], attempt=1),  # the same attempt again: a duplicate
+                movement(2, [0.9, 0.9], attempt=5),  # not the latest movement
+                movement(4, [float("nan"), 0.0]),  # non-finite
+                movement(2_000_000, [0.5, 0.5]),  # far ahead
+                movement(4, [], status=Movement.STATUS_NO_CONTACT),
+                movement(4, [0.45, 0.45], attempt=1),  # a failed cast re-executed: landed
+                movement(5, [0.5, 0.5])]
+        for msg in sent:
+            pub.publish(msg)
+        assert client.spin_until(lambda: memory.count == 5)
+        client.spin_for(0.3)
+        assert memory.memory.outcomes.tolist() == [[0.1, 0.1], [0.2, 0.2], [0.35, 0.35],
+                                                  [0.45, 0.45], [0.5, 0.5]]
+        assert memory.gate.quarantined == 4
+    finally:
+        client.close()

@@ -7,8 +7,7 @@ movement boundary.
 
 Interfaces:
   subscribes  movements      (sgim_msgs/Movement; validated: the run's count, to refuse a job
-                              that does not start at it, and a movement recorded just before
-                              a simulator crash)
+                              that does not start at it)
   action      imitate        (sgim_msgs/action/Imitate)
   client of   execute_action (sgim_msgs/srv/ExecuteAction)
 Parameters: the common ones, imitation_count and imitation_epsilon of LearnerConfig,
@@ -34,7 +33,7 @@ from sgim_nodes.nodes.ros_glue import (
     run_node,
     vec,
 )
-from sgim_nodes.nodes.sim_client import SERVICE_TIMEOUT, RecentMovements, SimClient
+from sgim_nodes.nodes.sim_client import SERVICE_TIMEOUT, SimClient
 from sgim_ros import qos
 
 
@@ -45,20 +44,15 @@ class ImitationNode(AsyncNode):
         self.action_size, self.outcome_size = values["action_size"], values["outcome_size"]
         self.rng = component_rng(values["seed"], "imitation")
         # Valid movements only (bag/validation.py): the run's count, to refuse a job that
-        # does not start at it, and the recent records a simulator restart may need.
+        # does not start at it.
         self.gate = LiveGate(self.get_logger().error,
                              Limits(self.action_size, self.outcome_size))
         if values["resume_from"]:
             self.gate.movements.count = resume_point(
                 values["resume_from"], self.config, values["resume_segments"]).count
-        self.recent = RecentMovements()
-        self.create_subscription(Movement, "movements", self._on_movement, qos.RECORDS)
-        self.sim = SimClient(self, values["service_timeout"], self.recent.recorded)
+        self.create_subscription(Movement, "movements", self.gate.admit_movement, qos.RECORDS)
+        self.sim = SimClient(self, values["service_timeout"])
         self.jobs = JobServer(self, Imitate, "imitate", self._run)
-
-    def _on_movement(self, msg: Movement) -> None:
-        if self.gate.admit_movement(msg).ok:
-            self.recent.add(msg)
 
     async def _run(self, handle) -> Imitate.Result:
         request: Imitate.Goal = handle.request

@@ -57,7 +57,7 @@ class LowLevelExplorer(AsyncNode):
         if values["resume_from"]:
             self.memory.resume(resume_point(values["resume_from"], self.config,
                                  values["resume_segments"]))
-        self.sim = SimClient(self, values["service_timeout"], self.memory.recorded)
+        self.sim = SimClient(self, values["service_timeout"])
         self._competences = self.create_publisher(Competence, "competences", qos.RECORDS)
         self.create_service(RegisterDemonstration, "register_demonstration", self._register)
         self.jobs = JobServer(self, ReachGoal, "reach_goal", self._attempt)

@@ -24,7 +24,6 @@ from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.learners import DEMONSTRATION, build_memory
 from sgim_nodes.core.memory import Memory
 from sgim_nodes.nodes.ros_glue import PROCESS_LABELS, check_vector, vec
-from sgim_nodes.nodes.sim_client import RecentMovements
 from sgim_ros import qos
 
 
@@ -43,7 +42,6 @@ class MovementMemory:
         self.gate = LiveGate(node.get_logger().error, Limits(action_size, outcome_size))
         self._latest_row: int | None = None  # memory row of movement `count`, if stored
         self._deferred: list[tuple[int, np.ndarray, np.ndarray]] = []
-        self._recent = RecentMovements()
         self._waiters: list[tuple[int, Future]] = []
         node.create_subscription(Movement, "movements", self._on_movement, qos.RECORDS)
 
@@ -62,7 +60,6 @@ class MovementMemory:
             self._latest_row = self.memory.add(vec(msg.action), vec(msg.outcome),
                                                PROCESS_LABELS.get(msg.process, ""))
         self.count = msg.index
-        self._recent.add(msg)
         for listener in self.after_store:
             listener(msg)
         for needed, future in self._waiters:
@@ -81,7 +78,6 @@ class MovementMemory:
             self.memory, self._latest_row,
             (vec(msg.action), vec(msg.outcome), PROCESS_LABELS.get(msg.process, "")) if ok
             else None)
-        self._recent.add(msg)
 
     def add_demonstration(self, action: np.ndarray, outcome: np.ndarray) -> str:
         """Store a demonstration as the learner's own experience; '' or why it was refused."""
@@ -120,10 +116,6 @@ class MovementMemory:
         self.count = self.gate.movements.count = point.count
         self.node.get_logger().info(f"resumed at movement {self.count} with "
                                     f"{len(self.memory)} pairs in memory")
-
-    def recorded(self, index: int) -> Movement | None:
-        """The record of a recent movement, if it came in (see SimClient)."""
-        return self._recent.recorded(index)
 
     def reached(self, count: int) -> Future:
         """A future done once every movement up to `count` is in memory."""
