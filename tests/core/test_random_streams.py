@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from sgim_nodes.core.learners import make_learner
-from sgim_nodes.core.scale import unit_box
 from sgim_nodes.core.random_streams import STREAM_NAMES, component_rng
+from sgim_nodes.core.scale import unit_box
 
 
 def test_same_seed_and_name_give_the_same_numbers_anywhere():
