@@ -131,7 +131,9 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
     taken = run.demonstrations_taken
     assert 0 < len(taken) < BURST and {d.index for d in taken} <= set(range(10, 10 + BURST))
     imitations = sum(1 for m in run.movements if m.process == Movement.PROCESS_IMITATION)
-    assert imitations <= 5 * len(taken)
+    from sgim_nodes.core.config import LearnerConfig
+
+    assert imitations <= LearnerConfig().imitation_count * len(taken)
     messages = [s.message for s in run.run_status]
     assert any("demonstration 999" in m and "refused" in m for m in messages), messages
     assert any("refused" in m and "waited" in m for m in messages), messages
