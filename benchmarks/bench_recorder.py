@@ -1,8 +1,9 @@
-"""Recorder throughput (messages/s) and worst-case loss of movements on SIGKILL.
+"""Recorder throughput (messages/s), worst-case loss of movements on SIGKILL, files per bag.
 
-Why: the recorder must keep up with the graph's bursts, and issue 7 asks how much a killed
-recorder can lose. Three figures:
-  1. the split bag writer alone, in-process (the ceiling set by rosbags and the splits);
+Why: the recorder must keep up with the graph's bursts, issue 7 asks how much a killed
+recorder can lose, and issue 12 how many files a run's bag makes. Four figures:
+  1. the bag writer alone, in-process (the ceiling set by rosbags and the checkpoints), and
+     the files of a 5000-movement bag;
   2. the recorder node over ROS: a burst of N movements published as fast as rclpy can,
      timed until the recorder has written the last one (its exit minus its finish grace);
   3. SIGKILL at random moments while movements are published at --kill-rate per second:
@@ -29,32 +30,34 @@ sys.path[:0] = [str(REPO), str(REPO / "sgim_nodes")]
 
 from sgim_nodes.bag.reader import NotABagError, load_run  # noqa: E402
 from sgim_nodes.bag.types import typestore  # noqa: E402
-from sgim_nodes.bag.writer import SplitBagWriter  # noqa: E402
+from sgim_nodes.bag.writer import BagWriter  # noqa: E402
 from sgim_nodes.graph.domain import isolated_ros_environment, reserve_domain  # noqa: E402
 
 GRACE = 0.5  # finish_grace given to the recorder
 
 
-def writer_alone(tmp: Path, n: int, split_messages: int) -> None:
+def writer_alone(tmp: Path, n: int, chunk_messages: int) -> None:
     import numpy as np
 
     ts = typestore()
     movement = ts.types["sgim_msgs/msg/Movement"]
     msg = movement(stamp=ts.types["builtin_interfaces/msg/Time"](sec=1, nanosec=0), index=1,
                    process=0, status=0, action=np.zeros(24), outcome=np.zeros(2),
-                   goal=np.zeros(2), goal_index=1)
+                   goal=np.zeros(2), goal_index=1, attempt=0)
     raw = ts.serialize_cdr(msg, movement.__msgtype__)
     for storage in ("mcap", "sqlite3"):
-        bag = SplitBagWriter(tmp / f"alone_{storage}", storage=storage,
-                             split_messages=split_messages, split_seconds=3600)
+        bag = BagWriter(tmp / f"alone_{storage}", storage=storage,
+                        chunk_messages=chunk_messages, chunk_seconds=3600)
         bag.add_topic("/movements", movement.__msgtype__)
         start = time.perf_counter()
         for k in range(n):
             bag.write("/movements", k + 1, raw)
         bag.close()
         elapsed = time.perf_counter() - start
-        print(f"writer alone, {storage:7s} parts of {split_messages}: {n / elapsed:9.0f} msg/s "
-              f"({1000 * elapsed / max(1, n // split_messages):.1f} ms per part incl. writes)")
+        files = sorted(p.name for p in bag.path.rglob("*") if p.is_file())
+        print(f"writer alone, {storage:7s} chunks of {chunk_messages}: {n / elapsed:9.0f} msg/s "
+              f"({1000 * elapsed / max(1, bag.checkpoints):.1f} ms per chunk incl. writes); "
+              f"{n} movements make {len(files)} files: {', '.join(files)}")
 
 
 def recorder(output: Path, env: dict, **params) -> subprocess.Popen:
@@ -91,7 +94,8 @@ class Publisher:
             time.sleep(0.02)
 
     def movement(self, index: int):
-        return self.Movement(index=index, action=[0.1] * 24, outcome=[0.2, 0.3], goal=[0.0, 0.0])
+        return self.Movement(index=index, action=[0.1] * 24, outcome=[0.2, 0.3], goal=[0.0, 0.0],
+                             goal_index=1)
 
     def close(self) -> None:
         import rclpy
@@ -108,8 +112,13 @@ def throughput(tmp: Path, env: dict, pub: Publisher, n: int) -> None:
     for msg in messages:
         pub.movements.publish(msg)
     published = time.perf_counter() - start
-    pub.status.publish(pub.RunStatus(state=pub.RunStatus.STATE_FINISHED))
-    child.wait(timeout=300)
+    pub.status.publish(pub.RunStatus(learner="sgim-d", movement_index=n, total_movements=n,
+                                     state=pub.RunStatus.STATE_FINISHED))
+    try:
+        child.wait(timeout=300)
+    except subprocess.TimeoutExpired:
+        os.killpg(child.pid, signal.SIGKILL)
+        raise
     recorded = time.perf_counter() - start - GRACE
     count = len(load_run(tmp / "burst", ["movements"]).movements)
     print(f"recorder over ROS: {n} movements published in {published:.2f} s "
@@ -118,12 +127,12 @@ def throughput(tmp: Path, env: dict, pub: Publisher, n: int) -> None:
 
 
 def kills(tmp: Path, env: dict, trials: int, rate: float,
-          split_messages: int, split_seconds: float) -> None:
+          chunk_messages: int, chunk_seconds: float) -> None:
     losses = []
     rng = random.Random(0)
     for trial in range(trials):
         bag = tmp / f"killed_{rate:.0f}_{trial}"
-        child = recorder(bag, env, split_messages=split_messages, split_seconds=split_seconds)
+        child = recorder(bag, env, chunk_messages=chunk_messages, chunk_seconds=chunk_seconds)
         pub = Publisher()
         pub.wait_matched()
         kill_after = rng.randint(int(rate), int(3 * rate))  # 1 to 3 s into the run
@@ -143,9 +152,9 @@ def kills(tmp: Path, env: dict, trials: int, rate: float,
                 count = 0
         losses.append(kill_after - count)
         pub.close()
-    bound = min(split_messages, rate * split_seconds)
-    print(f"SIGKILL x{trials} at {rate:.0f} movements/s (parts of {split_messages} msgs or "
-          f"{split_seconds} s): lost {losses}, worst {max(losses)} "
+    bound = min(chunk_messages, rate * chunk_seconds)
+    print(f"SIGKILL x{trials} at {rate:.0f} movements/s (chunks of {chunk_messages} msgs or "
+          f"{chunk_seconds} s): lost {losses}, worst {max(losses)} "
           f"(design bound ~{bound:.0f} + in-flight)")
 
 
@@ -154,14 +163,14 @@ def main(argv: list[str] | None = None) -> int:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--burst", type=int, default=5000, help="movements in the burst")
     parser.add_argument("--kills", type=int, default=5, help="SIGKILL trials per rate")
-    parser.add_argument("--kill-rates", type=float, nargs="+", default=[50.0, 1000.0],
+    parser.add_argument("--kill-rates", type=float, nargs="*", default=[50.0, 1000.0],
                         help="movements/s published during the SIGKILL trials")
-    parser.add_argument("--split-messages", type=int, default=250)
-    parser.add_argument("--split-seconds", type=float, default=0.5)
+    parser.add_argument("--chunk-messages", type=int, default=250)
+    parser.add_argument("--chunk-seconds", type=float, default=0.5)
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmpdir, reserve_domain() as domain:
         tmp = Path(tmpdir)
-        writer_alone(tmp, args.burst, args.split_messages)
+        writer_alone(tmp, args.burst, args.chunk_messages)
         os.environ.update(isolated_ros_environment(domain.domain_id))
         env = dict(os.environ)
         pub = Publisher()
@@ -169,8 +178,8 @@ def main(argv: list[str] | None = None) -> int:
             throughput(tmp, env, pub, args.burst)
         finally:
             pub.close()
-        for rate in args.kill_rates:
-            kills(tmp, env, args.kills, rate, args.split_messages, args.split_seconds)
+        for rate in args.kill_rates if args.kills > 0 else ():
+            kills(tmp, env, args.kills, rate, args.chunk_messages, args.chunk_seconds)
     return 0
 
 

@@ -33,6 +33,7 @@ setup(
             "recorder = sgim_nodes.nodes.recorder:main",
             "replay = sgim_nodes.bag.replay:main",
             "rebuild = sgim_nodes.bag.rebuild:main",
+            "repair = sgim_nodes.bag.repair:main",
             "analyze = sgim_nodes.analysis.cli:main",
         ],
     },

@@ -99,6 +99,7 @@ class SimBridgeNode(Node):
                     outcome=response.outcome,
                     goal=list(request.goal),
                     goal_index=request.goal_index,
+                    attempt=request.attempt,
                 )
             )
         return response

@@ -35,11 +35,13 @@ from rclpy.task import Future
 
 from sgim_msgs.msg import Demonstration, Evaluation, Movement
 from sgim_msgs.srv import ExecuteAction
+from sgim_nodes.bag.validation import Limits, LiveGate
 from sgim_ros import qos
 from sgim_ros.params import Param, ParameterError, declare, non_negative, positive
 from sim_bridge.data_files import load_teaching_set
 from teacher.human_commands import (
     DEFAULT_TOLERANCE,
+    OUTCOME_SIZE,
     CommandError,
     ExecuteFirst,
     LearnerState,
@@ -104,6 +106,11 @@ class HumanInputNode(Node):
         self.out, self.echo = out, echo
         self.finished = False
         self._pending: tuple[ExecuteFirst, Future, float] | None = None  # request, future, end
+        # A rogue movement must not move the count the teacher's demonstrations carry; the
+        # first valid movement sets it (a resumed run does not start at 1).
+        self.gate = LiveGate(self.get_logger().warning,
+                             Limits(self.library.action_size, OUTCOME_SIZE))
+        self.gate.movements.resync()
         self._demos = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
         self.create_subscription(Movement, "movements", self._on_movement, qos.RECORDS)
         self.create_subscription(Evaluation, "evaluations", self._on_evaluation, qos.RECORDS)
@@ -114,12 +121,16 @@ class HumanInputNode(Node):
     # --- what the graph says -----------------------------------------------------------
 
     def _on_movement(self, msg: Movement) -> None:
+        if not self.gate.admit_movement(msg).ok:  # the readers' checks (bag/validation.py)
+            return
         landed = msg.status == Movement.STATUS_OK
         problem = self.state.add_movement(msg.index, landed, msg.action, msg.outcome)
         if problem:
             self.get_logger().warning(problem)
 
     def _on_evaluation(self, msg: Evaluation) -> None:
+        if self.gate.check("evaluations", msg):
+            return
         latest = self.state.evaluation
         if latest is None or msg.movement_index >= latest[0]:
             self.state.evaluation = (int(msg.movement_index), float(msg.mean_distance))

@@ -20,6 +20,7 @@ from rclpy.node import Node
 
 from sgim_msgs.msg import Demonstration, Movement, RunStatus
 from sgim_nodes.bag.resume import resume_point
+from sgim_nodes.bag.validation import Limits, LiveGate
 from sgim_nodes.core.environment import PROCESS_CODES
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.core.teaching import (
@@ -51,6 +52,8 @@ class TeacherNode(Node):
             Param("outcome_noise", OUTCOME_NOISE, "the world's outcome noise (outcome units)",
                   positive, "> 0"),
             Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one"),
+            Param("movements", 0, "the run's movement budget, to validate run statuses "
+                  "(0: unknown)", non_negative, ">= 0"),
             Param("resume_from", "", "run folder to resume (see sgim_nodes/bag/resume.py)"),
             Param("resume_segments", 0, "how many of its recordings to read (0: all)",
                   lambda v: v >= 0, ">= 0"),
@@ -60,14 +63,19 @@ class TeacherNode(Node):
                                p["demonstration_period"],
                                p["tolerance_noise"] * p["outcome_noise"])
         self.reached: list[np.ndarray] = []
-        self.count = 0
         self.total: int | None = None
         self.given = 0
         self.answered: set[int] = set()
+        # Valid records only (bag/validation.py): a rogue movement moves neither the count
+        # nor what the learner has reached; a rogue run status does not end the teaching.
+        self.gate = LiveGate(self.get_logger().error, Limits(
+            action_size=ts.actions.shape[1], outcome_size=ts.outcomes.shape[1],
+            budget=p["movements"], teaching_set_size=len(ts.actions)))
+        self._latest_row: int | None = None  # where movement `count` is in `reached`
         if p["resume_from"]:
             point = resume_point(p["resume_from"], limit=p["resume_segments"])
             self.reached = list(point.own_outcomes)
-            self.count, self.answered = point.count, set(point.demonstration_turns)
+            self.gate.movements.count, self.answered = point.count, set(point.demonstration_turns)
             self.given = point.demonstrations_given
         self._out = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
         self.create_subscription(Movement, "movements", self._on_movement, qos.RECORDS)
@@ -75,17 +83,29 @@ class TeacherNode(Node):
         self.get_logger().info(f"{len(ts.actions)} teaching entries, period "
                                f"{p['demonstration_period']}")
 
+    @property
+    def count(self) -> int:
+        return self.gate.movements.count
+
     def _on_status(self, msg: RunStatus) -> None:
+        if self.gate.check("run_status", msg):
+            return
         self.total = msg.total_movements
         self._maybe_teach()
 
     def _on_movement(self, msg: Movement) -> None:
-        if msg.process == Movement.PROCESS_EVALUATION or msg.index <= self.count:
+        verdict = self.gate.admit_movement(msg)
+        if not verdict.ok:
             return
-        if msg.status == Movement.STATUS_OK and msg.process in OWN_CODES:
+        ok = msg.status == Movement.STATUS_OK and msg.process in OWN_CODES
+        if verdict.supersedes and self._latest_row is not None:  # a re-execution replaces
+            del self.reached[self._latest_row]  # the latest movement's outcome
+        self._latest_row = None
+        if ok:
+            self._latest_row = len(self.reached)
             self.reached.append(vec(msg.outcome))
-        self.count = msg.index
-        self._maybe_teach()
+        if not verdict.supersedes:
+            self._maybe_teach()
 
     def _maybe_teach(self) -> None:
         k = self.count

@@ -28,7 +28,7 @@ def movement(index: int, outcome, process: int = 0, status: int = 0):
     return T["sgim_msgs/msg/Movement"](
         stamp=stamp(index), index=index, process=process, status=status,
         action=np.zeros(24), outcome=np.zeros(0) if outcome is None else np.asarray(outcome),
-        goal=np.zeros(2), goal_index=0)
+        goal=np.zeros(2), goal_index=0, attempt=0)
 
 
 def evaluation(index: int, mean: float):

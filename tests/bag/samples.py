@@ -1,7 +1,8 @@
 """A small synthetic run as rosbags messages (no rclpy), and a writer for it.
 
 The run mimics the node graph's contract: movements 1..n, a goal and a competence every few
-movements, a demonstration mid-run followed by imitation movements, region maps, evaluations
+movements, a demonstration mid-run (offered, then taken by the arbiter) followed by imitation
+movements, region maps, evaluations
 and a final RunStatus. Values are seeded so tests can rebuild the same records directly.
 """
 
@@ -12,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from sgim_nodes.bag.types import TOPICS, typestore
-from sgim_nodes.bag.writer import SplitBagWriter
+from sgim_nodes.bag.writer import BagWriter
 
 TS = typestore()
 T = TS.types
@@ -22,13 +23,14 @@ def stamp(ns: int):
     return T["builtin_interfaces/msg/Time"](sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
 
 
-def movement(index: int, rng: np.random.Generator, process: int = 0, status: int = 0):
+def movement(index: int, rng: np.random.Generator, process: int = 0, status: int = 0,
+             attempt: int = 0):
     ok = status == 0
     return T["sgim_msgs/msg/Movement"](
         stamp=stamp(1_000 + index), index=index, process=process, status=status,
         action=rng.uniform(-1, 1, 24),
         outcome=rng.uniform(-1, 1, 2) if ok else np.zeros(0),
-        goal=rng.uniform(-1, 1, 2), goal_index=index // 5 + 1)
+        goal=rng.uniform(-1, 1, 2), goal_index=index // 5 + 1, attempt=attempt)
 
 
 def goal(index: int, movement_index: int, rng: np.random.Generator):
@@ -93,8 +95,9 @@ def synthetic_run(n: int = 60, seed: int = 0) -> list[tuple[str, object]]:
         if i % 5 == 1:
             goal_count += 1
             out.append(("goals", goal(goal_count, i - 1, rng)))
-        if i == n // 2:  # a demonstration at count i - 1, then imitation movements
-            out.append(("demonstrations", demonstration(1, i - 1, rng)))
+        if i == n // 2:  # a demonstration at count i - 1, taken, then imitation movements
+            demo = demonstration(1, i - 1, rng)
+            out += [("demonstrations", demo), ("demonstrations_taken", demo)]
         process = 2 if n // 2 <= i < n // 2 + 5 else (1 if i % 4 == 0 else 0)
         out.append(("movements", movement(i, rng, process, status=1 if i % 7 == 0 else 0)))
         if i % 5 == 0:
@@ -107,8 +110,8 @@ def synthetic_run(n: int = 60, seed: int = 0) -> list[tuple[str, object]]:
 
 
 def write_bag(path: Path, messages: list[tuple[str, object]], **writer_kwargs) -> Path:
-    """Write (topic, message) pairs with the split writer, topics as '/name'."""
-    bag = SplitBagWriter(path, **writer_kwargs)
+    """Write (topic, message) pairs with the bag writer, topics as "/name"."""
+    bag = BagWriter(path, **writer_kwargs)
     for topic, msgtype in TOPICS.items():
         bag.add_topic(f"/{topic}", msgtype)
     for k, (topic, msg) in enumerate(messages):

@@ -24,8 +24,8 @@ def _direct(messages, n_parts_lost: int = 0):
     for topic, msg in messages:
         if topic == "movements" and msg.status == 0:
             memory.add(msg.action, msg.outcome)
-        elif topic == "demonstrations":
-            memory.add(msg.action, msg.outcome)  # published just before movement k + 1
+        elif topic == "demonstrations_taken":
+            memory.add(msg.action, msg.outcome)  # taken just before movement k + 1
         elif topic == "competences":
             tree.add(msg.goal, msg.competence)
     return memory, tree
@@ -41,7 +41,7 @@ def messages():
 
 
 def test_rebuild_matches_folding_the_records_directly(tmp_path, messages):
-    bag = samples.write_bag(tmp_path / "run", messages, split_messages=64)
+    bag = samples.write_bag(tmp_path / "run", messages, chunk_messages=64)
     state = rebuild(bag, CONFIG)
     memory, tree = _direct(messages)
     assert len(state.memory) == len(memory) > 250
@@ -65,9 +65,9 @@ def test_rebuild_orders_by_movement_count_not_by_arrival(tmp_path, messages):
 
 
 def test_a_damaged_bag_gives_a_partial_state_with_a_warning(tmp_path, messages):
-    bag = samples.write_bag(tmp_path / "run", messages, split_messages=64)
+    bag = samples.write_bag(tmp_path / "run", messages, chunk_messages=64)
     last = storage_files(bag)[-1]
-    last.write_bytes(last.read_bytes()[:100])
+    last.write_bytes(last.read_bytes()[: last.stat().st_size * 2 // 3])  # a disk cut it
     with pytest.warns(BagReadWarning, match=last.name):
         state = rebuild(bag, CONFIG)
     assert 0 < state.n_movements < 300 and state.missing == []

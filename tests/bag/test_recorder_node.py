@@ -8,12 +8,12 @@ import random
 import signal
 import subprocess
 import time
-import warnings
 
 import numpy as np
 import pytest
 
 from sgim_nodes.bag.reader import BagReadWarning, load_run
+from sgim_nodes.bag.repair import repair
 from tests.bag import ros_helpers as h
 from tests.ros.graph_client import GraphClient
 
@@ -51,7 +51,7 @@ def _others():
         "demonstrations": [Demonstration(stamp=Time(sec=5), index=1, movement_index=30,
                                          action=[0.25] * 24, outcome=[0.5, 0.5],
                                          teaching_set_index=7, source="automatic")],
-        "evaluations": [Evaluation(movement_index=1000, mean_distance=0.5, outcome_size=2,
+        "evaluations": [Evaluation(movement_index=1000, mean_distance=0.25, outcome_size=2,
                                    goals=[0.0, 0.0, 0.5, 0.5], reached=[0.1, 0.0, 0.5, 0.9],
                                    distances=[0.1, 0.4])],
     }
@@ -102,11 +102,14 @@ def test_a_burst_is_recorded_once_in_order_and_the_recorder_stops_by_itself(
     assert not list(bag.glob(".part_*")), "a staging part was left behind"
 
 
-def test_sigkill_mid_burst_loses_at_most_the_open_part(ros_processes, client, tmp_path):
-    split_messages, rate = 200, 2000.0
+def test_sigkill_mid_run_leaves_one_file_readable_up_to_its_last_chunk(
+        ros_processes, client, tmp_path):
+    # 500 movements/s, ten times a real run's pace, which even a loaded machine keeps up with;
+    # the loss at a real pace is measured by benchmarks/bench_recorder.py.
+    chunk_messages, rate = 200, 500.0
     bag = tmp_path / "killed"
     recorder = ros_processes.start(
-        "recorder", h.recorder_command(bag, split_messages=split_messages, split_seconds=0.5))
+        "recorder", h.recorder_command(bag, chunk_messages=chunk_messages, chunk_seconds=0.5))
     pubs = h.publishers(client)
     h.wait_matched(client, pubs)
     rng = random.Random(5)
@@ -118,21 +121,26 @@ def test_sigkill_mid_burst_loses_at_most_the_open_part(ros_processes, client, tm
             break
     recorder.wait(timeout=10)
     assert recorder.returncode == -signal.SIGKILL
-    with warnings.catch_warnings():  # the unfinished part is reported, as it should be
-        warnings.simplefilter("ignore", BagReadWarning)
+    assert [p.name for p in bag.iterdir()] == ["killed.mcap"]  # one file, no summary yet
+    with pytest.warns(BagReadWarning, match="was not closed"):
         run = load_run(bag)
     indices = [m.index for m in run.movements]
     assert indices == list(range(1, len(indices) + 1)), "recorded movements are not a prefix"
     lost = kill_after - len(indices)
-    # The open part (<= split_messages) plus what was still in flight in DDS.
-    assert 0 <= lost <= split_messages + 0.1 * rate, (kill_after, len(indices))
+    # The open chunk (<= chunk_messages) plus what a loaded machine still had in flight.
+    assert 0 <= lost <= chunk_messages + rate * 1.0, (kill_after, len(indices))
+    assert "rewrote" in repair(bag)
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([bag]) as reader:  # a complete bag again, for any viewer
+        assert reader.message_count == len(indices)
 
 
 def test_sigint_and_sigterm_close_the_open_part(ros_processes, client, tmp_path):
     for sig in (signal.SIGINT, signal.SIGTERM):
         bag = tmp_path / f"stopped_{sig.name}"
         recorder = ros_processes.start(f"recorder_{sig.name}", h.recorder_command(
-            bag, split_messages=100000, split_seconds=3600.0))
+            bag, chunk_messages=100000, chunk_seconds=3600.0))
         pubs = h.publishers(client)
         h.wait_matched(client, pubs)
         rng = random.Random(6)
@@ -174,3 +182,85 @@ def test_movements_arriving_after_the_final_status_are_still_recorded(
         pubs["movements"].publish(h.movement(i, rng))
     assert recorder.wait(timeout=30) == 0
     assert [m.index for m in load_run(bag).movements] == list(range(1, 301))
+
+
+def _limit_file_size(limit: int):
+    """A file-size limit for a child: writes past it fail with EFBIG (Python ignores SIGXFSZ),
+    a real write error of the operating system, as a full disk's ENOSPC is."""
+    import resource
+
+    return lambda: resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+
+def test_a_write_error_stops_the_recorder_with_exit_code_3_and_says_why(
+        ros_processes, client, tmp_path):
+    import yaml
+
+    from sgim_nodes.nodes.recorder import WRITE_FAILED, quarantine_file
+
+    bag = tmp_path / "full"
+    recorder = ros_processes.start(
+        "recorder_full", h.recorder_command(bag, chunk_messages=50),
+        preexec_fn=_limit_file_size(48 * 1024), stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT, text=True)
+    pubs = h.publishers(client)
+    h.wait_matched(client, pubs)
+    rng = random.Random(8)
+    for k in h.paced(3000, 500.0):  # about 300 bytes each: the limit comes after ~150
+        pubs["movements"].publish(h.movement(k + 1, rng))
+        if recorder.poll() is not None:
+            break
+    output, _ = recorder.communicate(timeout=30)
+    assert recorder.returncode == WRITE_FAILED, output
+    assert "could not write" in output and "File too large" in output, output
+    assert "recording stopped" in output
+    report = yaml.safe_load(quarantine_file(bag).read_text())
+    assert "File too large" in report["write_error"]
+    with pytest.warns(BagReadWarning, match="was not closed"):
+        movements = load_run(bag).movements
+    assert 50 <= len(movements) < 3000  # what was flushed before the error is readable
+    assert [m.index for m in movements] == list(range(1, len(movements) + 1))
+
+
+def test_rogue_records_are_recorded_counted_and_never_end_the_recording(
+        ros_processes, client, tmp_path):
+    import yaml
+
+    from sgim_msgs.msg import Demonstration, RunStatus
+    from sgim_nodes.bag.reader import read_raw
+    from sgim_nodes.nodes.recorder import quarantine_file
+
+    bag = tmp_path / "attacked"
+    recorder = ros_processes.start("recorder_attacked",
+                                   h.recorder_command(bag, movements=60, finish_grace=0.5))
+    pubs = h.publishers(client)
+    h.wait_matched(client, pubs)
+    rng = random.Random(9)
+    for i in range(1, 31):
+        pubs["movements"].publish(h.movement(i, rng))
+    pubs["movements"].publish(h.movement(5, rng))  # a forged duplicate
+    pubs["movements"].publish(h.movement(2_000_000, rng))  # far ahead
+    pubs["demonstrations"].publish(Demonstration(
+        index=1, movement_index=30, action=[float("nan")] * 24, outcome=[0.1, 0.1],
+        teaching_set_index=3, source="human"))
+    # a forged end of the run (not this run's budget): the recording goes on
+    pubs["run_status"].publish(_status(RunStatus.STATE_FINISHED, 30))
+    time.sleep(1.5)
+    assert recorder.poll() is None, "a forged final status ended the recording"
+    for i in range(31, 61):
+        pubs["movements"].publish(h.movement(i, rng))
+    from sgim_msgs.msg import RunStatus as Status
+
+    pubs["run_status"].publish(Status(learner="sgim-d", seed=3, movement_index=60,
+                                      total_movements=60, state=Status.STATE_FINISHED))
+    assert recorder.wait(timeout=60) == 0
+    report = yaml.safe_load(quarantine_file(bag).read_text())
+    assert report["quarantined"] == {
+        "movements": {"duplicate": 1, "beyond-budget": 1},
+        "demonstrations": {"non-finite": 1}, "run_status": {"bad-value": 1}}
+    assert report["total_quarantined"] == 4 and report["write_error"] is None
+    assert report["received"]["movements"] == 62
+    assert len([r for r in read_raw(bag) if r.topic == "/movements"]) == 62  # all kept
+    with pytest.warns(BagReadWarning, match="4 record"):
+        run = load_run(bag)
+    assert [m.index for m in run.movements] == list(range(1, 61))

@@ -31,7 +31,7 @@ def test_replay_at_a_high_rate_delivers_everything(ros_processes, client, tmp_pa
     from sgim_nodes.nodes.recorder import ros_message_class, topic_qos
 
     messages = samples.synthetic_run(120, seed=3)
-    bag = samples.write_bag(tmp_path / "run", messages, split_messages=50)
+    bag = samples.write_bag(tmp_path / "run", messages, chunk_messages=50)
     received = {name: client.capture(ros_message_class(t), f"/{name}",
                                      topic_qos(name, keep_all=True))
                 for name, t in TOPICS.items()}
@@ -81,3 +81,48 @@ def test_the_recorded_gaps_are_kept_divided_by_the_rate():
     assert offsets(records, 2.0) == pytest.approx([0.0, 0.25, 1.0])
     assert offsets(records, 0.5) == pytest.approx([0.0, 1.0, 4.0])
     assert offsets([], 3.0) == []
+
+
+def test_replay_waits_for_a_subscriber_that_comes_late_and_loses_nothing(
+        ros_processes, client, tmp_path):
+    from sgim_msgs.msg import Movement
+    from sgim_ros import qos
+
+    bag = samples.write_bag(tmp_path / "run", samples.synthetic_run(400, seed=5))
+    child = ros_processes.start("replay_late", _replay(bag, "--rate", "50", "--topics",
+                                                       "movements", "--quiet"),
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    client.spin_for(3.0)  # the subscriber starts 3 s after the replay
+    assert child.poll() is None, "replay did not wait for its subscriber"
+    received = client.capture(Movement, "/movements", qos.RECORDS)
+    assert client.spin_until(lambda: len(received) == 400, 90), len(received)
+    out, _ = child.communicate(timeout=60)
+    assert child.returncode == 0, out
+    assert [m.index for m in received] == list(range(1, 401))
+
+
+def test_replay_refuses_to_play_to_nobody_unless_told(ros_processes, tmp_path):
+    bag = samples.write_bag(tmp_path / "run", samples.synthetic_run(10))
+    child = ros_processes.start("replay_nobody", _replay(bag, "--wait-subscribers", "1.5"),
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    out, _ = child.communicate(timeout=60)
+    assert child.returncode == 3, out
+    assert "too few subscribers on" in out and "/movements (0/1)" in out, out
+    assert "--play-anyway" in out
+    child = ros_processes.start("replay_anyway", _replay(
+        bag, "--wait-subscribers", "0.5", "--play-anyway", "--quiet"),
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    out, _ = child.communicate(timeout=60)
+    assert child.returncode == 0 and "playing anyway" in out, out
+
+
+def test_replay_leaves_quarantined_records_out_unless_asked(tmp_path):
+    from sgim_nodes.bag.replay import load
+
+    rng = np.random.default_rng(0)
+    messages = samples.synthetic_run(30)
+    messages.insert(20, ("movements", samples.movement(2_000_000, rng)))
+    bag = samples.write_bag(tmp_path / "run", messages)
+    movements = [r for r in load(bag, ["movements"]) if r.topic == "/movements"]
+    assert len(movements) == 30
+    assert len(load(bag, ["movements"], include_quarantined=True)) == 31

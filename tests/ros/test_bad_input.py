@@ -63,10 +63,11 @@ def test_interest_computer_ignores_records_outside_the_space(ros_processes, clie
     maps = client.capture(RegionMap, "/region_map", qos.LATEST_STATE)
     publisher = client.node.create_publisher(Competence, "/competences", qos.RECORDS)
     assert client.spin_until(lambda: maps and publisher.get_subscription_count() > 0)
-    publisher.publish(Competence(goal=[2.0, 0.0], competence=-0.5))
-    publisher.publish(Competence(goal=[0.1, 0.1], competence=0.5))  # competence must be <= 0
-    publisher.publish(Competence(goal=[0.1], competence=-0.5))
-    publisher.publish(Competence(goal=[0.1, 0.1], competence=-0.5))
+    for goal, value in (([2.0, 0.0], -0.5), ([0.1, 0.1], 0.5),  # competence must be <= 0
+                        ([0.1], -0.5), ([0.1, 0.1, 0.1], -0.5), ([0.1, 0.1], float("nan")),
+                        ([0.1, 0.1], -1e300), ([float("inf"), 0.1], -0.5)):
+        publisher.publish(Competence(goal=goal, competence=value, movements_used=3))
+    publisher.publish(Competence(goal=[0.1, 0.1], competence=-0.5, movements_used=3))
     assert client.spin_until(lambda: maps[-1].goal_count >= 1)
     client.spin_for(0.5)
     assert maps[-1].goal_count == 1  # only the good record was folded in
@@ -81,3 +82,39 @@ def test_a_parameter_file_of_the_wrong_type_is_refused_by_name(ros_processes, tm
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     output, _ = child.communicate(timeout=60)
     assert child.returncode == 2 and "zeta" in output and "int" in output, output
+
+
+def test_a_job_that_does_not_start_at_the_runs_count_is_refused(ros_processes, client):
+    """A rogue client's imitate or reach_goal job would re-record movements the run already
+    made; the job servers know the run's count from the movement stream and refuse it."""
+    from action_msgs.msg import GoalStatus
+    from rclpy.action import ActionClient
+
+    from sgim_msgs.action import Imitate, ReachGoal
+    from sgim_msgs.msg import Movement
+    from sgim_ros import qos
+
+    ros_processes.start("imitation", [ROS2RUN, "sgim_nodes", "imitation"])
+    ros_processes.start("explorer", [ROS2RUN, "sgim_nodes", "low_level_explorer"])
+    movements = client.node.create_publisher(Movement, "/movements", qos.RECORDS)
+    assert client.spin_until(lambda: movements.get_subscription_count() >= 2)
+    for k in range(1, 11):
+        movements.publish(Movement(index=k, process=Movement.PROCESS_RANDOM,
+                                   status=Movement.STATUS_OK, action=[0.1] * 24,
+                                   outcome=[0.2, 0.3]))
+    client.spin_for(1.0)
+
+    def status_of(action_type, name, goal):
+        action = ActionClient(client.node, action_type, name)
+        assert action.wait_for_server(timeout_sec=30)
+        sent = action.send_goal_async(goal)
+        assert client.spin_until(sent.done)
+        result = sent.result().get_result_async()
+        assert client.spin_until(result.done)
+        return result.result().status
+
+    assert status_of(Imitate, "/imitate", Imitate.Goal(
+        action=[0.1] * 24, outcome=[0.2, 0.3], repetitions=2, movements_before=3)) == \
+        GoalStatus.STATUS_ABORTED
+    assert status_of(ReachGoal, "/reach_goal", ReachGoal.Goal(
+        goal=[0.2, 0.2], goal_index=1, movements_before=3)) == GoalStatus.STATUS_ABORTED

@@ -126,7 +126,8 @@ def test_list_teach_goal_and_bad_input_through_the_prompt(ros_processes, client,
             _movement(3, learner, [-0.2, -0.2])]
     for m in sent:
         movements.publish(m)
-    evaluations.publish(Evaluation(movement_index=3, mean_distance=0.321, outcome_size=2))
+    evaluations.publish(Evaluation(movement_index=3, mean_distance=0.321, outcome_size=2,
+                                   goals=[0.0, 0.0], reached=[0.1, 0.1], distances=[0.321]))
     # Poll until the node has heard everything and sees the test's subscription.
     for _ in range(100):
         status = term.command("status")

@@ -46,9 +46,12 @@ bags alone, and write:
   results.md        final errors (mean and 95 % interval), pairwise tests (Welch's t and
                     Mann-Whitney U), isolated-region coverage, runs and durations
   results.json      the same numbers
-Each bag is read once; its columns are cached as <run>/{CACHE_NAME}
-(rebuilt when the bag changes).
-Damaged bags are reported and used as far as readable; unreadable runs are skipped."""
+Each run is read once, every segment of it (bag/, bag.resume1/, ...), its records validated
+as every reader validates them; its columns are cached as <run>/{CACHE_NAME} (rebuilt when a
+segment changes). Damaged bags are reported and used as far as readable; unreadable runs are
+skipped. Runs are pooled only with like runs: a learner's runs that differ in teacher, budget
+or parameters are analysed as separate groups (a warning names what differs), and runs of
+one group that share a seed stop the analysis unless --allow-repeated-seeds."""
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -67,6 +70,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
                         help="seed whose region trees are drawn (default: the lowest)")
     parser.add_argument("--no-cache", action="store_true",
                         help="re-read every bag, ignoring and rewriting the caches")
+    parser.add_argument("--allow-repeated-seeds", action="store_true",
+                        help="pool runs of one group that share a seed (by default the "
+                             "analysis refuses: they are not independent samples)")
     args = parser.parse_args(argv)
     if args.times is not None and any(t < 1 for t in args.times):
         parser.error("--times must be positive movement counts")
@@ -235,6 +241,12 @@ def run(args: argparse.Namespace) -> int:
     if not study.runs:
         print(f"analyze: no usable run in {study_dir}", file=sys.stderr)
         return 1
+    if study.repeated_seeds and not args.allow_repeated_seeds:
+        for group, names in study.repeated_seeds.items():
+            print(f"analyze: '{group}' has runs with the same seed ({', '.join(names)}): "
+                  "pooling them would count one sample twice. Remove the extra runs, or pass "
+                  "--allow-repeated-seeds", file=sys.stderr)
+        return 2
     out: Path = args.out or study_dir / "analysis"
     out.mkdir(parents=True, exist_ok=True)
     times = sorted(set(args.times)) if args.times else default_times(study)

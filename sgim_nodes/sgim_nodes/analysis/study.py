@@ -7,8 +7,16 @@ mtimes), so changing a figure option re-reads nothing. A damaged bag must not st
 whatever is readable is used, the damage is reported naming the file, and a run with nothing
 readable is skipped.
 
-Layout: `<study>/<learner>-seed<N>/bag/` plus `metadata.yaml` (learner, seed, movements, outcome,
-duration_s); the metadata wins over the folder name when both exist.
+Layout: `<study>/<learner>-seed<N>/bag/` (and `bag.resume1/`, ... when the run was resumed:
+every segment is read, in order) plus `metadata.yaml` (learner, seed, movements, outcome,
+duration_s, parameters); the metadata wins over the folder name when both exist. Records are
+validated as every reader validates them (bag/validation.py): quarantined ones are reported,
+never counted.
+
+Runs are pooled only with their like: runs of one learner whose teacher, budget or parameters
+differ are split into groups labelled by what differs (a warning says so), and two runs of
+one group with the same seed are not independent samples: `Study.repeated_seeds` lists them
+so that the command refuses to pool them unless told to.
 """
 
 from __future__ import annotations
@@ -23,29 +31,24 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from sgim_nodes.bag.reader import BagReadWarning, NotABagError, _Deserializer, read_raw
-from sgim_nodes.bag.records import (
-    DemonstrationRecord,
-    EvaluationRecord,
-    MovementRecord,
-    RegionMapRecord,
-    RunStatusRecord,
-    to_record,
-)
-from sgim_nodes.bag.types import TOPICS
+from sgim_nodes.bag.reader import BagReadWarning, NotABagError
+from sgim_nodes.bag.records import RegionMapRecord
+from sgim_nodes.bag.run_folder import load_run_folder, segments
 from sgim_nodes.core.environment import PROCESS_CODES, Status
 
 CACHE_NAME = "analysis_cache.npz"
-CACHE_VERSION = 1
+CACHE_VERSION = 2  # 2: validated records, every segment
 OUTCOME_SIZE = 2
 PROCESS_IMITATION, PROCESS_DEMONSTRATION, PROCESS_EVALUATION = (
     PROCESS_CODES[label] for label in ("imitation", "demonstration", "evaluation"))
 STATUS_OK = int(Status.OK)
 LEARNER_ORDER = ("sgim-d", "saggriac", "random-goals", "demo-only", "random")
 _RUN_NAME = re.compile(r"^(?P<learner>.+)-seed(?P<seed>\d+)$")
-_WANTED = {"movements": MovementRecord, "evaluations": EvaluationRecord,
-           "region_map": RegionMapRecord, "demonstrations": DemonstrationRecord,
-           "run_status": RunStatusRecord}
+_WANTED = ("movements", "evaluations", "region_map", "demonstrations", "demonstrations_taken",
+           "run_status")
+# Parameters that differ from run to run without changing the experiment.
+PER_RUN = frozenset({"seed", "output", "resume_from", "resume_segments", "storage",
+                     "wait_for_recorder", "ros_domain_id"})
 
 Warn = Callable[[str], None]
 
@@ -83,6 +86,22 @@ class RunData:
     budget: int = -1  # RunStatus.total_movements, -1 when never published
     final_state: int = -1  # the last RunStatus.state, -1 when none
     warnings: list[str] = field(default_factory=list)
+    group: str = ""  # the label it is pooled under (its learner, unless like runs differ)
+
+    def __post_init__(self) -> None:
+        self.group = self.group or self.learner
+
+    @property
+    def condition(self) -> dict:
+        """What must be equal for two runs to be pooled: learner, teacher, budget and every
+        parameter that is not per run (seed, paths)."""
+        params = self.metadata.get("parameters")
+        params = params if isinstance(params, dict) else {}
+        found = {k: v for k, v in params.items() if k not in PER_RUN}
+        found.update(learner=self.learner, movements=self.total_movements)
+        if "teacher" in self.metadata:
+            found["teacher"] = self.metadata["teacher"]
+        return found
 
     @property
     def total_movements(self) -> int:
@@ -124,40 +143,33 @@ class Study:
     runs: list[RunData]
     skipped: dict[str, str]  # run name -> why
     warnings: list[str]
+    repeated_seeds: dict[str, list[str]] = field(default_factory=dict)  # group -> runs
 
     @property
     def learners(self) -> list[str]:
-        """Learners present, in the paper's order, unknown names after them."""
-        names = {r.learner for r in self.runs}
-        known = [n for n in LEARNER_ORDER if n in names]
-        return known + sorted(names - set(known))
+        """The groups present (a learner's name, or its name and what sets the group apart),
+        learners in the paper's order, unknown names after them."""
+        order = {name: k for k, name in enumerate(LEARNER_ORDER)}
+        groups = {(r.learner, r.group) for r in self.runs}
+        return [g for _, g in sorted(groups, key=lambda lg: (order.get(lg[0], len(order)),
+                                                             lg[0], lg[1] != lg[0], lg[1]))]
 
-    def runs_of(self, learner: str) -> list[RunData]:
-        return sorted((r for r in self.runs if r.learner == learner), key=lambda r: r.seed)
+    def runs_of(self, group: str) -> list[RunData]:
+        return sorted((r for r in self.runs if r.group == group), key=lambda r: r.seed)
 
 
 def _point(values: np.ndarray) -> np.ndarray:
     return values[:OUTCOME_SIZE] if len(values) >= OUTCOME_SIZE else np.full(OUTCOME_SIZE, np.nan)
 
 
-def _read_bag(bag: Path) -> tuple[dict[str, np.ndarray], list[str]]:
-    """Deserialise the topics we need; a bad message is skipped rather than ending the run."""
-    records: dict[str, list] = {name: [] for name in _WANTED}
-    bad: list[str] = []
-    deserialize = _Deserializer()
+def _read_run(run_dir: Path) -> tuple[dict[str, np.ndarray], list[str]]:
+    """The validated records of every segment of a run, as the columns the analysis needs."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        for raw in read_raw(bag, _WANTED):
-            name = raw.topic.rsplit("/", 1)[-1]
-            if raw.msgtype != TOPICS.get(name):
-                continue
-            try:
-                records[name].append(to_record(_WANTED[name], raw.timestamp_ns,
-                                               deserialize(raw)))
-            except Exception as error:
-                if len(bad) < 3:
-                    bad.append(f"{bag}: undecodable {name} message skipped: {error}")
-    notes = [str(w.message) for w in caught if issubclass(w.category, BagReadWarning)] + bad
+        run = load_run_folder(run_dir, topics=_WANTED)
+    notes = [str(w.message) for w in caught if issubclass(w.category, BagReadWarning)]
+    records = {name: getattr(run, name) for name in _WANTED}
+    records["demonstrations"] = run.learner_demonstrations
     return _columns(records), notes
 
 
@@ -195,12 +207,16 @@ def _columns(records: dict[str, list]) -> dict[str, np.ndarray]:
     }
 
 
-def bag_fingerprint(bag: Path) -> str:
-    """Names, sizes and mtimes of every file of the bag: any rewrite changes it."""
+def bag_fingerprint(run_dir: Path) -> str:
+    """Names, sizes and mtimes of every file of every segment (and of params.yaml, which sets
+    the validation limits): any rewrite or a new segment changes it."""
     parts = [f"v{CACHE_VERSION}"]
-    for file in sorted(p for p in bag.rglob("*") if p.is_file()):
+    files = [f for segment in segments(run_dir) for f in segment.rglob("*") if f.is_file()]
+    if (run_dir / "params.yaml").is_file():
+        files.append(run_dir / "params.yaml")
+    for file in sorted(files):
         info = file.stat()
-        parts.append(f"{file.relative_to(bag)}:{info.st_size}:{info.st_mtime_ns}")
+        parts.append(f"{file.relative_to(run_dir)}:{info.st_size}:{info.st_mtime_ns}")
     return "|".join(parts)
 
 
@@ -256,12 +272,12 @@ def load_run_data(run_dir: Path, use_cache: bool = True, warn: Warn = _default_w
     if not bag.exists():
         warn(f"{run_dir}: no bag/ folder: skipped")
         return None
-    fingerprint = bag_fingerprint(bag)
+    fingerprint = bag_fingerprint(run_dir)
     cache = run_dir / CACHE_NAME
     cached = _load_cache(cache, fingerprint) if use_cache else None
     if cached is None:
         try:
-            columns, notes = _read_bag(bag)
+            columns, notes = _read_run(run_dir)
         except (NotABagError, OSError) as error:
             warn(f"{bag}: unreadable, run skipped: {error}")
             return None
@@ -317,4 +333,42 @@ def load_study(study_dir: str | Path, use_cache: bool = True, warn: Warn = _defa
             runs.append(run)
         if progress:
             progress(run_dir.name)
-    return Study(study_dir, runs, skipped, collected)
+    repeated = group_runs(runs, note)
+    return Study(study_dir, runs, skipped, collected, repeated)
+
+
+def _shown(value) -> str:
+    return str(value) if not isinstance(value, float) else f"{value:g}"
+
+
+def group_runs(runs: list[RunData], warn: Warn = _default_warn) -> dict[str, list[str]]:
+    """Label each run with the group it may be pooled in; return the groups in which a seed
+    repeats (group -> run names). Runs of a learner that differ in anything but per-run
+    parameters go to separate groups, labelled by the values that tell them apart."""
+    by_learner: dict[str, list[RunData]] = {}
+    for run in runs:
+        by_learner.setdefault(run.learner, []).append(run)
+    for learner, members in by_learner.items():
+        conditions = [run.condition for run in members]
+        keys = sorted({k for c in conditions for k in c})
+        differing = [k for k in keys if len({repr(c.get(k)) for c in conditions}) > 1]
+        for run, c in zip(members, conditions, strict=True):
+            run.group = learner if not differing else (
+                f"{learner} [" + ", ".join(f"{k}={_shown(c.get(k))}" for k in differing) + "]")
+        if differing:
+            groups: dict[str, list[str]] = {}
+            for run in members:
+                groups.setdefault(run.group, []).append(str(run.seed))
+            warn(f"{learner}: runs differ in {', '.join(differing)}; not pooled, analysed as "
+                 + "; ".join(f"'{g}' (seeds {', '.join(s)})" for g, s in groups.items()))
+    repeated: dict[str, list[str]] = {}
+    seen: dict[tuple[str, int], str] = {}
+    for run in sorted(runs, key=lambda r: r.name):
+        key = (run.group, run.seed)
+        if key in seen:
+            repeated.setdefault(run.group, [seen[key]]).append(run.name)
+        else:
+            seen[key] = run.name
+    for group, names in repeated.items():
+        warn(f"'{group}': runs {', '.join(names)} share a seed: not independent samples")
+    return repeated

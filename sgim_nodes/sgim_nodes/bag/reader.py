@@ -1,14 +1,23 @@
 """Read a run's bag back in order, as plain Python records, tolerating a damaged part.
 
-A recorder killed mid-run leaves its bag as finished parts plus, possibly, an unfinished one
-(see bag.writer); a disk can also truncate a file. Analysis should get everything that is
-readable, with a warning naming each file it had to skip, rather than nothing. Each storage
-file is therefore opened on its own (rosbags' own multi-file reader fails as a whole).
+A recorder killed mid-run leaves its storage file without summary (see bag.writer): it is
+read up to its last complete chunk (bag.mcap_recovery); a disk can also truncate or damage a
+file. Analysis should get everything that is readable, with a warning naming each file it had
+to skip, rather than nothing. Each storage file is therefore opened on its own (rosbags' own
+multi-file reader fails as a whole); bags of the older layout, many small parts and staging
+folders, read the same way.
 Types come from the definitions embedded in the bag, so reading needs no ROS install.
 
   read_raw(path)        -> RawRecord(topic, msgtype, timestamp_ns, data) in order
   read_messages(path)   -> (topic, timestamp_ns, rosbags message) in order
-  load_run(path)        -> RunRecords: every sgim_msgs topic as lists of dataclasses
+  load_run(path)        -> RunRecords: every VALID sgim_msgs record as lists of dataclasses
+
+load_run validates every record with bag/validation.py, the checks the live nodes make: a
+record that fails is quarantined (listed in RunRecords.quarantined and reported with a
+QuarantineWarning naming its topic, index and reason), never returned with the others; a
+movement re-executed by the simulator client (a higher `attempt`) supersedes its first record.
+The limits (sizes, budget, teaching set) come from the run folder's params.yaml when the bag
+sits in one.
 """
 
 from __future__ import annotations
@@ -16,7 +25,7 @@ from __future__ import annotations
 import json
 import re
 import warnings
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -24,15 +33,24 @@ from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
+from sgim_nodes.bag.mcap_recovery import RecoveryError, recover
 from sgim_nodes.bag.records import RECORD_TYPES, RunRecords, to_record
 from sgim_nodes.bag.types import TOPICS
+from sgim_nodes.bag.validation import (
+    LIMITS_KEY,
+    Limits,
+    Problem,
+    RunValidator,
+    summarise,
+    teaching_set_size,
+)
 from sgim_nodes.bag.writer import STAGING_PREFIX
 
 STORAGE_SUFFIXES = (".mcap", ".db3")
 _PART_NUMBER = re.compile(r"_(\d+)\.(mcap|db3)$")
 
-__all__ = ["BagReadWarning", "NotABagError", "RawRecord", "RunRecords", "load_run",
-           "read_messages", "read_raw", "storage_files"]
+__all__ = ["BagReadWarning", "NotABagError", "QuarantineWarning", "RawRecord", "RunRecords",
+           "limits_for", "load_run", "read_messages", "read_raw", "storage_files"]
 
 
 class NotABagError(ValueError):
@@ -41,6 +59,10 @@ class NotABagError(ValueError):
 
 class BagReadWarning(UserWarning):
     """Part of the bag could not be read; what was readable was returned."""
+
+
+class QuarantineWarning(BagReadWarning):
+    """Records of the bag failed validation: they were left out (the bag still holds them)."""
 
 
 @dataclass(frozen=True)
@@ -70,10 +92,12 @@ def storage_files(path: str | Path) -> list[Path]:
         return [path]
     listed: list[Path] = []
     meta = path / "metadata.yaml"
+    rosbag_meta = False
     if meta.exists():
         try:
             info = _load_metadata(meta)["rosbag2_bagfile_information"]
             listed = [path / Path(p).name for p in info["relative_file_paths"]]
+            rosbag_meta = True
         except (ValueError, KeyError, TypeError) as error:
             warnings.warn(BagReadWarning(
                 f"{meta} is unreadable ({error}): reading the storage files found instead"),
@@ -86,9 +110,24 @@ def storage_files(path: str | Path) -> list[Path]:
     staging = sorted(path.glob(f"{STAGING_PREFIX}*/*"), key=lambda p: int(p.parent.name[6:])
                      if p.parent.name[6:].isdigit() else 2**31)
     files += [p for p in staging if p.suffix in STORAGE_SUFFIXES]
-    if not files and not meta.exists():
-        raise NotABagError(f"{path} is not a bag: no metadata.yaml and no .mcap or .db3 file")
+    if not files and not rosbag_meta:
+        raise NotABagError(_not_a_bag(path, meta))
     return files
+
+
+def _not_a_bag(path: Path, meta: Path) -> str:
+    """What a folder without a recording is, so the user knows where to look."""
+    if (path / "bag").is_dir():
+        return (f"{path} is not a bag but a run folder: its first recording is {path / 'bag'} "
+                "(rebuild and analyze read run folders whole)")
+    if meta.exists():
+        return (f"{path} is not a bag: its metadata.yaml is not a rosbag2 one (a run's "
+                "metadata.yaml? then this run folder has no bag/ recording: the run never "
+                "started its recorder, or the bag was moved)")
+    inside = sorted(p.name for p in path.iterdir())[:5]
+    return (f"{path} is not a bag: no metadata.yaml and no .mcap or .db3 file"
+            + (f" (it holds {', '.join(inside)}{', ...' if len(inside) == 5 else ''})"
+               if inside else " (it is empty)"))
 
 
 def _load_metadata(meta: Path) -> dict:
@@ -104,17 +143,23 @@ def _load_metadata(meta: Path) -> dict:
             raise ValueError(str(error).splitlines()[0]) from None
 
 
-def read_raw(path: str | Path, topics: Iterable[str] | None = None) -> Iterator[RawRecord]:
+def read_raw(path: str | Path, topics: Iterable[str] | None = None,
+             on_gap: Callable[[], None] | None = None,
+             on_topic: Callable[[str], None] | None = None) -> Iterator[RawRecord]:
     """Every message of the bag in recording order; topics filter by name or last component.
 
     A file that cannot be opened or ends early is reported with a BagReadWarning and the
-    reading goes on with the next one; NotABagError when nothing at all is readable.
+    reading goes on with the next one (`on_gap` is called: records may be missing there);
+    NotABagError when nothing at all is readable. `on_topic` hears every topic a readable file
+    declares, messages or not.
     """
     wanted = None if topics is None else set(topics)
-    return _iter_raw(path, storage_files(path), wanted)
+    return _iter_raw(path, storage_files(path), wanted, on_gap or (lambda: None),
+                     on_topic or (lambda _: None))
 
 
-def _iter_raw(path: str | Path, files: list[Path], wanted: set[str] | None
+def _iter_raw(path: str | Path, files: list[Path], wanted: set[str] | None,
+              on_gap: Callable[[], None], on_topic: Callable[[str], None]
               ) -> Iterator[RawRecord]:
     readable = 0
     for file in files:
@@ -124,12 +169,20 @@ def _iter_raw(path: str | Path, files: list[Path], wanted: set[str] | None
             reader = Reader(file)
             reader.open()
         except Exception as error:
+            if file.suffix == ".mcap" and not unfinished:
+                recovered = yield from _recover(file, wanted, on_gap, on_topic)
+                if recovered is not None:
+                    readable += 1
+                    continue
             why = ("an unfinished part (the recorder was stopped while writing it)"
                    if unfinished else "unreadable")
             warnings.warn(BagReadWarning(f"skipped {file}: {why}: {error}"), stacklevel=2)
+            on_gap()
             continue
         readable += 1
         try:
+            for conn in reader.connections:
+                on_topic(conn.topic)
             conns = [c for c in reader.connections if _wanted(c.topic, wanted)]
             if conns:
                 for conn, timestamp, data in reader.messages(connections=conns):
@@ -139,11 +192,42 @@ def _iter_raw(path: str | Path, files: list[Path], wanted: set[str] | None
         except Exception as error:
             warnings.warn(BagReadWarning(
                 f"{file} is damaged: read {count} messages, then: {error}"), stacklevel=2)
+            if file.suffix == ".mcap":  # the chunks after the damaged one may be fine
+                yield from _recover(file, wanted, on_gap, on_topic, skip=count)
+            else:
+                on_gap()
         finally:
             reader.close()
     if files and not readable and not all(_unfinished(f) for f in files):
         raise NotABagError(f"{path}: none of its {len(files)} storage files is readable "
                            f"({', '.join(f.name for f in files)})")
+
+
+def _recover(file: Path, wanted: set[str] | None, on_gap: Callable[[], None],
+             on_topic: Callable[[str], None], skip: int = 0) -> Iterator[RawRecord]:
+    """The complete, undamaged chunks of an MCAP file, past the first `skip` messages already
+    read; returns the number of messages read, or None when the file is no MCAP at all."""
+    damage: list[str] = []
+    count = 0
+    try:
+        for m in recover(file, on_gap=lambda why: (damage.append(why), on_gap())):
+            on_topic(m.topic)
+            if _wanted(m.topic, wanted):
+                count += 1
+                if count > skip:
+                    yield RawRecord(m.topic, m.msgtype, m.timestamp_ns, m.data, m.msgdef)
+    except (OSError, RecoveryError):
+        return None
+    skipped = f"; {len(damage)} damaged chunk(s) skipped" if damage else ""
+    if skip:
+        message = f"{file}: read on past the damage: {count - skip} more messages{skipped}"
+    else:
+        message = (f"{file} was not closed (its recorder was killed or could not write): read "
+                   f"{count} messages, up to its last complete chunk{skipped}. `repair "
+                   f"{file.parent}` rewrites it as a complete bag")
+    warnings.warn(BagReadWarning(message), stacklevel=3)
+    on_gap()  # whatever followed the last chunk is gone
+    return count
 
 
 def _unfinished(file: Path) -> bool:
@@ -187,36 +271,84 @@ def read_messages(path: str | Path, topics: Iterable[str] | None = None
         yield record.topic, record.timestamp_ns, deserialize(record)
 
 
-def load_run(path: str | Path, topics: Iterable[str] | None = None) -> RunRecords:
-    """Every sgim_msgs record of the bag, one list per topic (unknown topics are ignored)."""
-    run = RunRecords()
+def limits_for(path: str | Path) -> Limits:
+    """The validation limits of the run a bag belongs to: those its recorder validated with
+    (the bag's custom_data), else its run folder's params.yaml (the launcher's), else the
+    fishing world's sizes and the packaged teaching set, budget unknown."""
+    path = Path(path)
+    bag = path.parent if path.is_file() else path
+    try:
+        info = _load_metadata(bag / "metadata.yaml")["rosbag2_bagfile_information"]
+        return Limits.from_json((info.get("custom_data") or {})[LIMITS_KEY])
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        pass
+    for folder in (bag, *bag.parents[:1]):
+        params = folder / "params.yaml"
+        if params.is_file():
+            try:
+                import yaml
+
+                values = yaml.safe_load(params.read_text(encoding="utf-8"))
+                return Limits.for_run(values["/**"]["ros__parameters"])
+            except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
+                warnings.warn(BagReadWarning(f"{params} is unreadable ({error}): validating "
+                                             "with the default limits"), stacklevel=2)
+            break
+    return Limits(teaching_set_size=teaching_set_size())
+
+
+def load_run(path: str | Path, topics: Iterable[str] | None = None,
+             limits: Limits | None = None, *, validator: RunValidator | None = None,
+             into: RunRecords | None = None) -> RunRecords:
+    """Every valid sgim_msgs record of the bag, one list per topic (unknown topics ignored).
+
+    `validator` carries a run's count across its recordings (resume.load_run_folder); `into`
+    appends to records already read. Quarantined records are reported once, at the end.
+    """
+    run = into if into is not None else RunRecords()
+    validator = validator or RunValidator(limits or limits_for(path))
+    already, superseded = len(validator.quarantined), len(validator.superseded)
     deserialize = _Deserializer()
     wanted = set(TOPICS) if topics is None else set(topics)
-    for record in read_raw(path, wanted):
+
+    def declared(topic: str) -> None:
+        run.topics.add(topic.rsplit("/", 1)[-1])
+
+    for record in read_raw(path, wanted, on_gap=validator.resync, on_topic=declared):
         name = record.topic.rsplit("/", 1)[-1]
         if record.msgtype != TOPICS.get(name):
             continue
-        getattr(run, name).append(to_record(RECORD_TYPES[name], record.timestamp_ns,
-                                            deserialize(record)))
-    run.movements = superseded_removed(run.movements, str(path))
+        try:
+            message = deserialize(record)
+        except NotABagError:
+            raise
+        except Exception as error:
+            validator.quarantine(name, -1, Problem("undecodable", f"undecodable: {error}"),
+                                 record.timestamp_ns)
+            continue
+        verdict = validator.admit(name, message, record.timestamp_ns)
+        if not verdict.ok:
+            continue
+        converted = to_record(RECORD_TYPES[name], record.timestamp_ns, message)
+        records = getattr(run, name)
+        if verdict.supersedes:  # the re-execution replaces the latest record of its index
+            k = max(i for i, m in enumerate(records) if m.index == converted.index)
+            records[k] = converted
+        else:
+            records.append(converted)
+    run.quarantined = list(validator.quarantined)
+    run.superseded = list(validator.superseded)
+    if validator.superseded[superseded:]:
+        warnings.warn(BagReadWarning(
+            f"{path}: movement(s) {validator.superseded[superseded:]} re-executed after the "
+            "simulator gave no answer: the re-execution's record (higher attempt) is the one "
+            "the learner used"), stacklevel=2)
+    new = validator.quarantined[already:]
+    if new:
+        warnings.warn(QuarantineWarning(
+            f"{path}: {len(new)} record(s) quarantined (kept in the bag, left out here): "
+            + "; ".join(summarise(new))), stacklevel=2)
     return run
-
-
-def superseded_removed(movements: list, where: str) -> list:
-    """One record per movement index: the last one.
-
-    An index is recorded twice when the simulator died after publishing a movement but before
-    its answer reached the learner: the learner executed that movement again with the same
-    index (sim_client.py), and only the later record is the one it learned from.
-    """
-    last = {m.index: k for k, m in enumerate(movements)}
-    if len(last) == len(movements):
-        return movements
-    doubled = sorted({m.index for k, m in enumerate(movements) if last[m.index] != k})
-    warnings.warn(f"{where}: movement(s) {doubled} recorded more than once (re-executed after "
-                  "a simulator restart); keeping the last record of each", BagReadWarning,
-                  stacklevel=3)
-    return [m for k, m in enumerate(movements) if last[m.index] == k]
 
 
 def load_movements(path: str | Path) -> list:

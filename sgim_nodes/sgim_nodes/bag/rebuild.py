@@ -2,16 +2,19 @@
 
 The bag is the run's only complete history, so the learner's memory and interest tree must be
 derivable from it alone, with the real core classes (not a re-implementation that could
-drift):
-  memory  every successful movement that is not an evaluation, plus every demonstration
-          (an empty one, the teacher's "nothing left to show", is skipped),
-          in movement-count order; a demonstration given at count k goes after movement k
-          (it was registered before movement k+1), whatever the order the topics arrived in;
+drift). Every record is first validated by the reader (bag/validation.py, the live nodes'
+checks): a quarantined record is never folded, and the summary says how many there were.
+  memory  every successful learner movement, plus every demonstration the learner took (the
+          arbiter's `demonstrations_taken`; in a bag recorded before it existed, every
+          non-empty demonstration), in movement-count order; a demonstration taken at count k
+          goes after movement k (it was registered before movement k+1), whatever the order
+          the topics arrived in;
   tree    the recorded competences folded into a RegionTree in movement-count order (ties
           keep the recording order), with the LearnerConfig's region parameters.
 The last recorded region map, when there is one, is compared with the rebuilt leaves.
 
-CLI: python -m sgim_nodes.bag.rebuild BAG [--set name=value ...]   (prints a summary)
+CLI: python -m sgim_nodes.bag.rebuild BAG_OR_RUN_FOLDER [--set name=value ...]   (a summary)
+A run folder (run_experiment.sh's, with bag/ and maybe bag.resume1/, ...) is read whole.
 """
 
 from __future__ import annotations
@@ -20,12 +23,13 @@ import argparse
 import ast
 import sys
 import warnings
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from sgim_nodes.bag.reader import NotABagError, load_run, storage_files, superseded_removed
+from sgim_nodes.bag.reader import NotABagError
 from sgim_nodes.bag.records import (
     DemonstrationRecord,
     EvaluationRecord,
@@ -34,6 +38,7 @@ from sgim_nodes.bag.records import (
     RunRecords,
     RunStatusRecord,
 )
+from sgim_nodes.bag.run_folder import load_records
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS, Status
 from sgim_nodes.core.learners import DEMONSTRATION, region_tree_for
@@ -54,7 +59,8 @@ class RebuiltState:
     n_movements: int  # the learner's movement count: the highest Movement.index recorded
     n_recorded: int  # learner movements present in the bag
     missing: list[int] = field(default_factory=list)  # indices 1..n_movements not recorded
-    duplicates: int = 0  # records superseded by a later record of the same index
+    duplicates: int = 0  # records superseded by a re-execution of the same index
+    quarantined: list = field(default_factory=list)  # validation.Quarantined, not folded
     n_memory_movements: int = 0
     n_demonstrations: int = 0
     n_competences: int = 0
@@ -74,19 +80,11 @@ class RebuiltState:
 
 
 def _dims(run: RunRecords) -> tuple[int, int]:
-    action = next((len(r.action) for r in [*run.movements, *run.demonstrations]
+    action = next((len(r.action) for r in [*run.movements, *run.learner_demonstrations]
                    if len(r.action)), DEFAULT_DIMS[0])
-    outcome = next((len(r.outcome) for r in [*run.movements, *run.demonstrations]
+    outcome = next((len(r.outcome) for r in [*run.movements, *run.learner_demonstrations]
                     if len(r.outcome)), DEFAULT_DIMS[1])
     return action, outcome
-
-
-def _learner_movements(run: RunRecords) -> tuple[list[MovementRecord], int]:
-    """Non-evaluation movements, one record per index (the reader's rule: the last one, the
-    re-execution the learner used), and the number of superseded records."""
-    learner = [m for m in run.movements if m.process != PROCESS_EVALUATION]
-    kept = superseded_removed(learner, "rebuild")
-    return kept, len(learner) - len(kept)
 
 
 FISHING_NOISE = 0.07  # sim_bridge.scaling.OUTCOME_NOISE, without importing the world
@@ -94,17 +92,17 @@ FISHING_NOISE = 0.07  # sim_bridge.scaling.OUTCOME_NOISE, without importing the 
 
 def rebuild_from_records(run: RunRecords, config: LearnerConfig | None = None,
                          scale: WorldScale | None = None) -> RebuiltState:
-    """Fold the records of a run into a fresh Memory and RegionTree (``scale``: the world's
-    outcome box and noise; default the fishing world's, [-1, 1]^m)."""
+    """Fold the (validated) records of a run into a fresh Memory and RegionTree (``scale``:
+    the world's outcome box and noise; default the fishing world's, [-1, 1]^m)."""
     c = config or LearnerConfig()
     action_dim, outcome_dim = _dims(run)
     memory = Memory(action_dim, outcome_dim, c.memory_rebuild_fraction, c.memory_min_tail,
                     c.memory_max_tail)
     tree: RegionTree = region_tree_for(c, scale or unit_box(outcome_dim, FISHING_NOISE))
-    movements, duplicates = _learner_movements(run)
+    movements = [m for m in run.movements if m.process != PROCESS_EVALUATION]
     entries: list[tuple[int, int, MovementRecord | DemonstrationRecord]] = [
         (m.index, 0, m) for m in movements] + [(d.movement_index, 1, d)
-                                               for d in run.demonstrations]
+                                               for d in run.learner_demonstrations]
     entries.sort(key=lambda e: (e[0], e[1]))  # stable: ties keep the recording order
     n_mem = n_demos = 0
     for _, is_demo, record in entries:
@@ -125,7 +123,8 @@ def rebuild_from_records(run: RunRecords, config: LearnerConfig | None = None,
         n_movements=n_movements,
         n_recorded=len(movements),
         missing=sorted(set(range(1, n_movements + 1)) - indices),
-        duplicates=duplicates,
+        duplicates=len(run.superseded),
+        quarantined=list(run.quarantined),
         n_memory_movements=n_mem,
         n_demonstrations=n_demos,
         n_competences=len(run.competences),
@@ -136,14 +135,15 @@ def rebuild_from_records(run: RunRecords, config: LearnerConfig | None = None,
 
 
 def rebuild(path: str | Path, config: LearnerConfig | None = None) -> RebuiltState:
-    """Rebuild from a bag directory or storage file (damaged parts are skipped with a
-    BagReadWarning; NotABagError when nothing is readable)."""
-    return rebuild_from_records(load_run(path), config)
+    """Rebuild from a bag directory, a storage file or a run folder (every segment); damaged
+    parts are skipped with a BagReadWarning; NotABagError says what the path is otherwise."""
+    return rebuild_from_records(load_records(path)[0], config)
 
 
 def summary(state: RebuiltState) -> str:
     missing = f", {len(state.missing)} missing" if state.missing else ""
-    dups = f", {state.duplicates} superseded records ignored" if state.duplicates else ""
+    dups = (f", {state.duplicates} superseded by their re-execution" if state.duplicates
+            else "")
     lines = [
         f"movements: {state.n_movements} (learner count), {state.n_recorded} recorded"
         f"{missing}{dups}",
@@ -160,6 +160,10 @@ def summary(state: RebuiltState) -> str:
     lines.append("last evaluation: none" if e is None else
                  f"last evaluation: at movement {e.movement_index}, mean distance "
                  f"{e.mean_distance:.4f} over {len(e.distances)} goals")
+    if state.quarantined:
+        counts = Counter(f"{q.topic} ({q.problem.kind})" for q in state.quarantined)
+        lines.append(f"quarantined: {len(state.quarantined)} records left out (still in the "
+                     "bag): " + ", ".join(f"{n} {what}" for what, n in counts.most_common()))
     s = state.last_status
     if s is not None:
         lines.append(f"run status: {STATE_NAMES.get(s.state, s.state)} ({s.learner}, seed "
@@ -186,7 +190,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="rebuild", description="Rebuild the learner's memory and region tree from a "
         "run's bag and print a summary.")
-    parser.add_argument("bag", type=Path, help="bag directory (or one .mcap / .db3 file)")
+    parser.add_argument("bag", type=Path, help="bag directory, one .mcap / .db3 file, or a run "
+                        "folder (bag/ and its bag.resumeN/ segments are read in order)")
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                         help="a LearnerConfig value, e.g. --set max_goals_per_region=50")
     args = parser.parse_args(argv)
@@ -197,9 +202,9 @@ def main(argv: list[str] | None = None) -> int:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            files = storage_files(args.bag)
-            print(f"bag: {args.bag} ({len(files)} storage files)", file=sys.stderr)
-            state = rebuild(args.bag, config)
+            records, read = load_records(args.bag)
+            print(f"read: {', '.join(str(p) for p in read)}", file=sys.stderr)
+            state = rebuild_from_records(records, config)
         except NotABagError as error:
             print(f"rebuild: {error}", file=sys.stderr)
             return 2

@@ -32,6 +32,7 @@ class MovementRecord:
     outcome: np.ndarray
     goal: np.ndarray
     goal_index: int
+    attempt: int = 0  # > 0: a re-execution of the index (bags before it was recorded: 0)
 
 
 @dataclass
@@ -121,18 +122,36 @@ class RunStatusRecord:
 
 @dataclass
 class RunRecords:
-    """Every record of a run, one list per topic, in recording order."""
+    """Every valid record of a run, one list per topic, in recording order.
+
+    Readers validate every record (bag/validation.py): what fails is in `quarantined`, never
+    in the lists; a movement superseded by its re-execution is replaced in place (its index is
+    listed in `superseded`). `topics`: the record topics the bag declares, so that a reader can
+    tell "no demonstration was taken" from "a bag older than demonstrations_taken".
+    """
 
     movements: list[MovementRecord] = field(default_factory=list)
     goals: list[GoalRecord] = field(default_factory=list)
     competences: list[CompetenceRecord] = field(default_factory=list)
     region_map: list[RegionMapRecord] = field(default_factory=list)
     demonstrations: list[DemonstrationRecord] = field(default_factory=list)
+    demonstrations_taken: list[DemonstrationRecord] = field(default_factory=list)
     evaluations: list[EvaluationRecord] = field(default_factory=list)
     run_status: list[RunStatusRecord] = field(default_factory=list)
+    quarantined: list = field(default_factory=list)  # validation.Quarantined
+    superseded: list[int] = field(default_factory=list)
+    topics: set[str] = field(default_factory=set)
 
     def counts(self) -> dict[str, int]:
         return {name: len(getattr(self, name)) for name in RECORD_TYPES}
+
+    @property
+    def learner_demonstrations(self) -> list[DemonstrationRecord]:
+        """The demonstrations the learner took (its memory holds them): those the arbiter
+        republished, or, in a bag recorded before it did, every non-empty one."""
+        if "demonstrations_taken" in self.topics or self.demonstrations_taken:
+            return self.demonstrations_taken
+        return [d for d in self.demonstrations if len(d.action)]
 
 
 def _rows(flat, size: int) -> np.ndarray:
@@ -152,7 +171,8 @@ def to_record(kind: type, time_ns: int, m) -> object:
     t, s = int(time_ns), _stamp(m.stamp)
     if kind is MovementRecord:
         return MovementRecord(t, s, int(m.index), int(m.process), int(m.status), _vec(m.action),
-                              _vec(m.outcome), _vec(m.goal), int(m.goal_index))
+                              _vec(m.outcome), _vec(m.goal), int(m.goal_index),
+                              int(getattr(m, "attempt", 0)))
     if kind is GoalRecord:
         return GoalRecord(t, s, int(m.index), int(m.movement_index), _vec(m.point),
                           int(m.region_id), int(m.mode))
@@ -182,6 +202,7 @@ RECORD_TYPES: dict[str, type] = {
     "competences": CompetenceRecord,
     "region_map": RegionMapRecord,
     "demonstrations": DemonstrationRecord,
+    "demonstrations_taken": DemonstrationRecord,
     "evaluations": EvaluationRecord,
     "run_status": RunStatusRecord,
 }

@@ -1,11 +1,15 @@
 """Play a run's bag back onto its topics, as `ros2 bag play` would (no rosbag2 on PyPI).
 
 The recorded CDR bytes are published as they are, with publishers of the recorded types and
-the graph's QoS, keeping the recorded time gaps divided by --rate. It first waits (briefly)
-for subscribers, because records are VOLATILE: a message published before a subscriber
-matched is gone for it. State topics (region_map) keep only their latest value in the
+the graph's QoS, keeping the recorded time gaps divided by --rate. Records are VOLATILE: a
+message published before a subscriber matched is gone for it, so replay first waits until
+every topic has --subscribers matched subscriptions (default 1), for at most
+--wait-subscribers seconds, and refuses to play (exit 3, naming the topics) when they are not
+there, unless --play-anyway. State topics (region_map) keep only their latest value in the
 publisher, so each of them is acknowledged before the next is sent, or fast replays would
-skip maps. Damaged bag parts are skipped with a warning (see bag.reader).
+skip maps. Damaged bag parts are skipped with a warning (see bag.reader), and records that
+fail validation (bag/validation.py, as every reader) are left out and reported, unless
+--include-quarantined plays the bag exactly as recorded (an audit of an attack).
 
 Usage: python -m sgim_nodes.bag.replay BAG [--rate 2.0] [--topics movements goals] [--ros-args ...]
 """
@@ -18,10 +22,18 @@ import time
 import warnings
 from pathlib import Path
 
-from sgim_nodes.bag.reader import NotABagError, RawRecord, read_raw
-from sgim_nodes.bag.types import STATE_TOPICS
+from sgim_nodes.bag.reader import (
+    NotABagError,
+    RawRecord,
+    _Deserializer,
+    limits_for,
+    read_raw,
+)
+from sgim_nodes.bag.types import STATE_TOPICS, TOPICS
+from sgim_nodes.bag.validation import Problem, RunValidator, summarise
 
 ACK_TIMEOUT = 5.0  # seconds to wait at the end for every subscriber to acknowledge
+NO_SUBSCRIBERS = 3  # exit code: the expected subscribers never matched
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -35,20 +47,62 @@ def _parser() -> argparse.ArgumentParser:
                         help="playback speed factor (2.0: twice as fast); default 1.0")
     parser.add_argument("--topics", nargs="+", metavar="TOPIC",
                         help="only these topics (full name or last component, e.g. movements)")
-    parser.add_argument("--wait-subscribers", type=float, default=2.0, metavar="SECONDS",
-                        help="wait up to this long for a subscriber on every topic (default 2)")
+    parser.add_argument("--subscribers", type=int, default=1, metavar="N",
+                        help="matched subscriptions every topic must have before playing "
+                             "(default 1; 0: do not wait)")
+    parser.add_argument("--wait-subscribers", type=float, default=30.0, metavar="SECONDS",
+                        help="how long to wait for them (default 30); then replay refuses, "
+                             f"exit {NO_SUBSCRIBERS}")
+    parser.add_argument("--play-anyway", action="store_true",
+                        help="play even if the subscribers did not all match in time")
+    parser.add_argument("--include-quarantined", action="store_true",
+                        help="also play records that fail validation (exactly as recorded)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     return parser
 
 
-def load(bag: Path, topics: list[str] | None) -> list[RawRecord]:
-    """The records to play, with every reading problem printed as a warning."""
+def load(bag: Path, topics: list[str] | None, include_quarantined: bool = False
+         ) -> list[RawRecord]:
+    """The records to play, with every reading problem printed as a warning; records that
+    fail validation are left out (and reported) unless `include_quarantined`."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        records = list(read_raw(bag, topics))
+        validator = RunValidator(limits_for(bag))
+        records = list(read_raw(bag, topics, on_gap=validator.resync))
     for w in caught:
         print(f"replay: warning: {w.message}", file=sys.stderr)
-    return records
+    if include_quarantined:
+        return records
+    deserialize = _Deserializer()
+    kept = []
+    for record in records:
+        name = record.topic.rsplit("/", 1)[-1]
+        if record.msgtype == TOPICS.get(name):
+            try:
+                message = deserialize(record)
+            except Exception as error:
+                validator.quarantine(name, -1, Problem("undecodable", str(error)))
+                continue
+            if not validator.admit(name, message).ok:
+                continue
+        kept.append(record)
+    if validator.quarantined:
+        print(f"replay: {len(validator.quarantined)} record(s) fail validation and are not "
+              "played (--include-quarantined plays them): "
+              + "; ".join(summarise(validator.quarantined)), file=sys.stderr)
+    return kept
+
+
+def wait_for_subscribers(pubs: dict, wanted: int, timeout: float, ok) -> list[str]:
+    """Wait until every publisher has `wanted` matched subscriptions; the topics that lack
+    them when `timeout` runs out (empty when all matched)."""
+    deadline = time.monotonic() + timeout
+    while ok() and time.monotonic() < deadline:
+        if all(p.get_subscription_count() >= wanted for p in pubs.values()):
+            return []
+        time.sleep(0.02)
+    return [f"{t} ({p.get_subscription_count()}/{wanted})" for t, p in pubs.items()
+            if p.get_subscription_count() < wanted]
 
 
 def offsets(records: list[RawRecord], rate: float) -> list[float]:
@@ -58,8 +112,10 @@ def offsets(records: list[RawRecord], rate: float) -> list[float]:
 
 
 def play(records: list[RawRecord], rate: float, wait_subscribers: float,
-         quiet: bool = False, args: list[str] | None = None) -> int:
-    """Publish the records in a fresh rclpy context; returns the number published."""
+         quiet: bool = False, args: list[str] | None = None, subscribers: int = 1,
+         play_anyway: bool = False) -> int:
+    """Publish the records in a fresh rclpy context; returns the number published, or -1
+    when the expected subscribers did not match in time (and not `play_anyway`)."""
     import rclpy
     from rclpy.duration import Duration
     from tqdm import tqdm
@@ -74,12 +130,15 @@ def play(records: list[RawRecord], rate: float, wait_subscribers: float,
         for topic, msgtype in {r.topic: r.msgtype for r in records}.items():
             pubs[topic] = node.create_publisher(ros_message_class(msgtype), topic,
                                                 topic_qos(topic))
-        deadline = time.monotonic() + wait_subscribers
-        while (rclpy.ok() and time.monotonic() < deadline
-               and any(p.get_subscription_count() == 0 for p in pubs.values())):
-            time.sleep(0.02)
-        if lonely := [t for t, p in pubs.items() if p.get_subscription_count() == 0]:
-            print(f"replay: no subscriber yet on {', '.join(lonely)}: playing anyway",
+        lonely = wait_for_subscribers(pubs, subscribers, wait_subscribers, rclpy.ok)
+        if lonely:
+            if not play_anyway:
+                print(f"replay: after {wait_subscribers:g} s, too few subscribers on "
+                      f"{', '.join(lonely)}: not playing (a record published before its "
+                      "subscriber matches is lost to it). Start the subscribers first, wait "
+                      "longer (--wait-subscribers) or pass --play-anyway", file=sys.stderr)
+                return -1
+            print(f"replay: too few subscribers on {', '.join(lonely)}: playing anyway",
                   file=sys.stderr)
         bar = tqdm(total=len(records), unit="msg", disable=quiet, file=sys.stderr)
         start = time.monotonic()
@@ -117,10 +176,10 @@ def main(argv: list[str] | None = None) -> int:
     options = parser.parse_args(argv)
     if not options.rate > 0:
         parser.error(f"--rate must be > 0, got {options.rate}")
-    if options.wait_subscribers < 0:
-        parser.error("--wait-subscribers must be >= 0")
+    if options.wait_subscribers < 0 or options.subscribers < 0:
+        parser.error("--wait-subscribers and --subscribers must be >= 0")
     try:
-        records = load(options.bag, options.topics)
+        records = load(options.bag, options.topics, options.include_quarantined)
     except NotABagError as error:
         print(f"replay: {error}", file=sys.stderr)
         return 2
@@ -134,7 +193,9 @@ def main(argv: list[str] | None = None) -> int:
           f"{span:.1f} s recorded, {span / options.rate:.1f} s at rate {options.rate}",
           file=sys.stderr)
     published = play(records, options.rate, options.wait_subscribers, options.quiet,
-                     ["replay", *ros_args])
+                     ["replay", *ros_args], options.subscribers, options.play_anyway)
+    if published < 0:
+        return NO_SUBSCRIBERS
     print(f"replay: published {published} of {len(records)} messages", file=sys.stderr)
     return 0 if published == len(records) else 130
 

@@ -13,53 +13,21 @@ uninterrupted run would have made.
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from sgim_nodes.bag.reader import load_run, superseded_removed
 from sgim_nodes.bag.rebuild import RebuiltState, rebuild_from_records
 from sgim_nodes.bag.records import RunRecords
+from sgim_nodes.bag.run_folder import (  # noqa: F401 - the launcher's names for them
+    FIRST_SEGMENT,
+    load_run_folder,
+    next_segment,
+    segments,
+)
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.teaching import OWN_PROCESSES
-
-FIRST_SEGMENT = "bag"
-_RESUMED = re.compile(r"^bag\.resume(\d+)$")
-
-
-def segments(run_dir: str | Path) -> list[Path]:
-    """The run's recordings in the order they were made."""
-    run_dir = Path(run_dir)
-    later = sorted(((int(m.group(1)), p) for p in run_dir.iterdir()
-                    if (m := _RESUMED.match(p.name))), key=lambda t: t[0])
-    first = run_dir / FIRST_SEGMENT
-    return ([first] if first.exists() else []) + [p for _, p in later]
-
-
-def next_segment(run_dir: str | Path) -> Path:
-    run_dir = Path(run_dir)
-    if not (run_dir / FIRST_SEGMENT).exists():
-        return run_dir / FIRST_SEGMENT
-    return run_dir / f"bag.resume{len(segments(run_dir))}"
-
-
-def load_run_folder(run_dir: str | Path, limit: int = 0) -> RunRecords:
-    """Every record of a run across its recordings (the first `limit` ones if > 0: a resumed
-    graph reads only those made before its own), as one RunRecords."""
-    parts = segments(run_dir)
-    if limit > 0:
-        parts = parts[:limit]
-    if not parts:
-        raise FileNotFoundError(f"{run_dir}: no recording ('{FIRST_SEGMENT}/') in this folder")
-    merged = RunRecords()
-    for part in parts:
-        run = load_run(part)
-        for name in vars(merged):
-            getattr(merged, name).extend(getattr(run, name))
-    merged.movements = superseded_removed(merged.movements, str(run_dir))
-    return merged
 
 
 def records_until(records: RunRecords, count: int) -> RunRecords:
@@ -70,7 +38,10 @@ def records_until(records: RunRecords, count: int) -> RunRecords:
         goals=[g for g in records.goals if g.movement_index <= count],
         competences=[c for c in records.competences if c.movement_index <= count],
         demonstrations=[d for d in records.demonstrations if d.movement_index < count],
+        demonstrations_taken=[d for d in records.demonstrations_taken
+                              if d.movement_index < count],
         evaluations=[e for e in records.evaluations if e.movement_index <= count],
+        topics=set(records.topics),
     )
 
 
@@ -88,7 +59,8 @@ class ResumePoint:
 
     @property
     def latest_demonstration(self):
-        demos = [d for d in self.records.demonstrations if len(d.action)]
+        """The last demonstration the learner took (demo-only varies it)."""
+        demos = self.records.learner_demonstrations
         return demos[-1] if demos else None
 
     @property

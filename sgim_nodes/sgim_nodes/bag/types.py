@@ -26,6 +26,7 @@ TOPICS: dict[str, str] = {
     "competences": f"{PACKAGE}/msg/Competence",
     "region_map": f"{PACKAGE}/msg/RegionMap",
     "demonstrations": f"{PACKAGE}/msg/Demonstration",
+    "demonstrations_taken": f"{PACKAGE}/msg/Demonstration",
     "evaluations": f"{PACKAGE}/msg/Evaluation",
     "run_status": f"{PACKAGE}/msg/RunStatus",
 }

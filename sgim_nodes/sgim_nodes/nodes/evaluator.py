@@ -3,14 +3,16 @@
 It rebuilds the learner's memory from the movement stream (and the demonstrations) and runs
 the core Evaluator with its OWN fishing world, so an evaluation never adds a movement, never
 touches the learner's memory or simulator, and sees exactly the memory the learner had after
-movement N. Evaluations happen at 0, at every multiple of `eval_every`, and at the run's last
-movement (announced on run_status).
+movement N. Evaluations happen at exactly 0, every multiple of `eval_every`, and the run's
+budget (`movements`, or, when it is 0, the budget a valid run_status announces). Its memory
+holds the valid learner movements and the demonstrations the learner took
+(`demonstrations_taken`): a demonstration offered but refused never reaches it.
 
 Interfaces:
-  subscribes  movements, demonstrations, run_status
+  subscribes  movements, demonstrations_taken, run_status
   publishes   evaluations (sgim_msgs/Evaluation)
 Parameters: the common ones, the memory and inverse-model fields of LearnerConfig, eval_every,
-noise (of the evaluator's world; default the world's).
+movements, noise (of the evaluator's world; default the world's).
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from rclpy.node import Node
 from sgim_msgs.msg import Demonstration, Evaluation, Movement, RunStatus
 from sgim_nodes.bag.rebuild import rebuild_from_records
 from sgim_nodes.bag.resume import records_until, resume_point
+from sgim_nodes.bag.validation import Limits, LiveGate
 from sgim_nodes.core.evaluator import EVALUATION_SEED_OFFSET, Evaluator
 from sgim_nodes.core.inverse_model import InverseModel
 from sgim_nodes.core.learners import inverse_model_for, inverse_or_centre
@@ -42,6 +45,8 @@ class EvaluatorNode(Node):
                   "the start and the end", non_negative, ">= 0"),
             Param("noise", DEFAULT_NOISE, "motor-command noise of the evaluator's own world",
                   non_negative, ">= 0"),
+            Param("movements", 0, "the run's movement budget, evaluated at its end (0: take it "
+                  "from the run status)", non_negative, ">= 0"),
         ))
         self.every = values["eval_every"]
         self.action_size = values["action_size"]
@@ -52,7 +57,9 @@ class EvaluatorNode(Node):
         self.memory = MovementMemory(self, config, self.action_size, values["outcome_size"])
         self.memory.before_store.append(self._before_movement)
         self.memory.after_store.append(self._after_movement)
-        self.final: int | None = None
+        self.final: int | None = values["movements"] or None
+        self.gate = LiveGate(self.get_logger().error, Limits(
+            self.action_size, values["outcome_size"], budget=values["movements"]))
         self.done: set[int] = set()
         self.missed: list[int] = []
         if values["resume_from"]:
@@ -67,16 +74,21 @@ class EvaluatorNode(Node):
             self.done |= {0}
             self._point, self._config = point, config
         self._out = self.create_publisher(Evaluation, "evaluations", qos.RECORDS)
-        self.create_subscription(Demonstration, "demonstrations", self._on_demo, qos.RECORDS)
+        self.create_subscription(Demonstration, "demonstrations_taken", self._on_demo,
+                                 qos.RECORDS)
         self.create_subscription(RunStatus, "run_status", self._on_status, qos.RECORDS)
         self.get_logger().info(f"{len(goals)} benchmark goals, every {self.every} movements")
 
     def _on_demo(self, msg: Demonstration) -> None:
+        if self.gate.check("demonstrations_taken", msg):
+            return
         if len(msg.action):
             self.memory.add_demonstration_after(msg.movement_index, vec(msg.action),
                                                 vec(msg.outcome))
 
     def _on_status(self, msg: RunStatus) -> None:
+        if self.gate.check("run_status", msg):  # a forged status moves no evaluation
+            return
         if 0 not in self.done:
             self._evaluate(0)
         while self.missed:
@@ -84,10 +96,10 @@ class EvaluatorNode(Node):
             state = rebuild_from_records(records_until(self._point.records, k), self._config)
             self.done.discard(k)
             self._evaluate(k, inverse_model_for(state.memory, self._config))
-        if msg.movement_index == msg.total_movements:
+        if self.final is None and msg.movement_index == msg.total_movements:
             self.final = msg.total_movements
-            if self.memory.count >= self.final:
-                self._evaluate(self.final)
+        if self.final is not None and self.memory.count >= self.final:
+            self._evaluate(self.final)
 
     def _before_movement(self, msg: Movement) -> None:
         if 0 not in self.done:

@@ -20,6 +20,7 @@ from rclpy.task import Future
 from sgim_msgs.msg import Goal, RegionMap
 from sgim_msgs.srv import ChooseGoal
 from sgim_nodes.bag.resume import resume_point
+from sgim_nodes.bag.validation import Limits, LiveGate
 from sgim_nodes.core.goal_selection import GoalSelector
 from sgim_nodes.core.learners import goal_mode_probabilities
 from sgim_nodes.core.random_streams import component_rng
@@ -56,11 +57,15 @@ class GoalGenerator(AsyncNode):
             self.goal_count = resume_point(values["resume_from"], c,
                                  values["resume_segments"]).goal_index
         self._waiters: list[tuple[int, Future]] = []
+        self.gate = LiveGate(self.get_logger().error,
+                             Limits(values["action_size"], values["outcome_size"]))
         self._goals = self.create_publisher(Goal, "goals", qos.RECORDS)
         self.create_subscription(RegionMap, "region_map", self._on_map, qos.LATEST_STATE)
         self.create_service(ChooseGoal, "choose_goal", self._choose)
 
     def _on_map(self, msg: RegionMap) -> None:
+        if self.gate.check("region_map", msg):  # the readers' checks: logged, not used
+            return
         if self.snapshot is not None and msg.goal_count < self.snapshot.goal_count:
             return  # an older map arriving late never replaces a newer one
         self.snapshot = snapshot_from_msg(msg)

@@ -6,8 +6,8 @@ imitation movements aimed at the demonstrated outcome. A cancel is honoured at t
 movement boundary.
 
 Interfaces:
-  subscribes  movements      (sgim_msgs/Movement; only to recognise a movement recorded just
-                              before a simulator crash)
+  subscribes  movements      (sgim_msgs/Movement; validated: the run's count, to refuse a job
+                              that does not start at it)
   action      imitate        (sgim_msgs/action/Imitate)
   client of   execute_action (sgim_msgs/srv/ExecuteAction)
 Parameters: the common ones, imitation_count and imitation_epsilon of LearnerConfig,
@@ -19,6 +19,8 @@ from __future__ import annotations
 from sgim_msgs.action import Imitate
 from sgim_msgs.msg import Movement
 from sgim_msgs.srv import ExecuteAction
+from sgim_nodes.bag.resume import resume_point
+from sgim_nodes.bag.validation import Limits, LiveGate
 from sgim_nodes.core.environment import MovementResult
 from sgim_nodes.core.imitation import Imitation
 from sgim_nodes.core.random_streams import component_rng
@@ -31,7 +33,7 @@ from sgim_nodes.nodes.ros_glue import (
     run_node,
     vec,
 )
-from sgim_nodes.nodes.sim_client import SERVICE_TIMEOUT, RecentMovements, SimClient
+from sgim_nodes.nodes.sim_client import SERVICE_TIMEOUT, SimClient
 from sgim_ros import qos
 
 
@@ -41,9 +43,15 @@ class ImitationNode(AsyncNode):
         values, self.config = declare_learner(self, (SERVICE_TIMEOUT,))
         self.action_size, self.outcome_size = values["action_size"], values["outcome_size"]
         self.rng = component_rng(values["seed"], "imitation")
-        recent = RecentMovements()
-        self.create_subscription(Movement, "movements", recent.add, qos.RECORDS)
-        self.sim = SimClient(self, values["service_timeout"], recent.recorded)
+        # Valid movements only (bag/validation.py): the run's count, to refuse a job that
+        # does not start at it.
+        self.gate = LiveGate(self.get_logger().error,
+                             Limits(self.action_size, self.outcome_size))
+        if values["resume_from"]:
+            self.gate.movements.count = resume_point(
+                values["resume_from"], self.config, values["resume_segments"]).count
+        self.create_subscription(Movement, "movements", self.gate.admit_movement, qos.RECORDS)
+        self.sim = SimClient(self, values["service_timeout"])
         self.jobs = JobServer(self, Imitate, "imitate", self._run)
 
     async def _run(self, handle) -> Imitate.Result:
@@ -51,6 +59,10 @@ class ImitationNode(AsyncNode):
         result = Imitate.Result(best_distance=float("inf"))
         why = (check_vector(request.action, self.action_size, "demonstrated action", 1.0)
                or check_vector(request.outcome, self.outcome_size, "demonstrated outcome"))
+        count = self.gate.movements.count
+        if not why and request.movements_before < count:
+            why = (f"the job starts after movement {request.movements_before}, but the run is "
+                   f"at movement {count}: not this run's arbiter")
         if why:
             self.get_logger().error(f"refused an imitation: {why}")
             handle.abort()

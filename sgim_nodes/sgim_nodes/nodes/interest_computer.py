@@ -17,17 +17,11 @@ from rclpy.node import Node
 
 from sgim_msgs.msg import Competence, RegionMap
 from sgim_nodes.bag.resume import resume_point
+from sgim_nodes.bag.validation import Limits, LiveGate
 from sgim_nodes.core.learners import region_tree_for
 from sgim_nodes.core.region_snapshot import RegionIds, snapshot
 from sgim_nodes.core.region_tree import RegionTree
-from sgim_nodes.nodes.ros_glue import (
-    check_vector,
-    declare_learner,
-    region_map_msg,
-    run_node,
-    vec,
-    world_scale,
-)
+from sgim_nodes.nodes.ros_glue import declare_learner, region_map_msg, run_node, vec, world_scale
 from sgim_ros import qos
 
 
@@ -43,16 +37,14 @@ class InterestComputer(Node):
             point = resume_point(values["resume_from"], c,
                                  values["resume_segments"])
             self.tree, self.goal_count = point.state.tree, point.state.n_competences
+        self.gate = LiveGate(self.get_logger().error,
+                             Limits(values["action_size"], self.outcome_size))
         self._map = self.create_publisher(RegionMap, "region_map", qos.LATEST_STATE)
         self.create_subscription(Competence, "competences", self._on_competence, qos.RECORDS)
         self._publish(0)
 
     def _on_competence(self, msg: Competence) -> None:
-        why = check_vector(msg.goal, self.outcome_size, "goal", bound=1.0)
-        if not why and not -1.0 <= msg.competence <= 0.0:
-            why = f"competence must lie in [-1, 0], got {msg.competence}"
-        if why:
-            self.get_logger().error(f"ignored competence record {msg.goal_index}: {why}")
+        if self.gate.check("competences", msg):  # the readers' checks: logged, not folded
             return
         self.tree.add(vec(msg.goal), float(msg.competence))
         self.goal_count += 1

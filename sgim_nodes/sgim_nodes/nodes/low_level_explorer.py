@@ -57,7 +57,7 @@ class LowLevelExplorer(AsyncNode):
         if values["resume_from"]:
             self.memory.resume(resume_point(values["resume_from"], self.config,
                                  values["resume_segments"]))
-        self.sim = SimClient(self, values["service_timeout"], self.memory.recorded)
+        self.sim = SimClient(self, values["service_timeout"])
         self._competences = self.create_publisher(Competence, "competences", qos.RECORDS)
         self.create_service(RegisterDemonstration, "register_demonstration", self._register)
         self.jobs = JobServer(self, ReachGoal, "reach_goal", self._attempt)
@@ -80,6 +80,9 @@ class LowLevelExplorer(AsyncNode):
         request: ReachGoal.Goal = handle.request
         result = ReachGoal.Result(competence=-1.0)
         why = check_vector(request.goal, self.outcome_size, "goal", bound=1.0)
+        if not why and request.movements_before < self.memory.count:
+            why = (f"the job starts after movement {request.movements_before}, but the run is "
+                   f"at movement {self.memory.count}: not this run's arbiter")
         if why:
             self.get_logger().error(f"refused goal {request.goal_index}: {why}")
             handle.abort()

@@ -4,6 +4,12 @@ The explorer and the evaluator each hold a copy of the learner's memory, built f
 stream every movement goes through (`movements`, in order, nothing dropped). A job that must
 see the memory after movement N awaits `reached(N)`: the same memory the single-process
 learner would have at that point, whatever the message timing.
+
+Every movement passes the validation every bag reader applies (bag/validation.py): a record
+that is malformed, out of bounds, a duplicate or a jump ahead of the run's count is logged
+and ignored, so a rogue publisher can neither fill the memory nor move the count; a
+re-execution of the latest movement (a higher `attempt`) replaces its first record, as the
+readers replace it.
 """
 
 from __future__ import annotations
@@ -13,10 +19,11 @@ from rclpy.node import Node
 from rclpy.task import Future
 
 from sgim_msgs.msg import Movement
+from sgim_nodes.bag.validation import Limits, LiveGate
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.learners import DEMONSTRATION, build_memory
+from sgim_nodes.core.memory import Memory
 from sgim_nodes.nodes.ros_glue import PROCESS_LABELS, check_vector, vec
-from sgim_nodes.nodes.sim_client import RecentMovements
 from sgim_ros import qos
 
 
@@ -29,39 +36,48 @@ class MovementMemory:
         self.config = config
         self.action_size, self.outcome_size = action_size, outcome_size
         self.memory, self.inverse_model = build_memory(config, action_size, outcome_size)
-        self.count = 0  # highest learner movement index seen
+        self.count = 0  # the run's count: the latest valid learner movement
         self.before_store: list = []  # called with each learner Movement before it is stored
         self.after_store: list = []  # ... and after (then memory holds it)
+        self.gate = LiveGate(node.get_logger().error, Limits(action_size, outcome_size))
+        self._latest_row: int | None = None  # memory row of movement `count`, if stored
         self._deferred: list[tuple[int, np.ndarray, np.ndarray]] = []
-        self._recent = RecentMovements()
         self._waiters: list[tuple[int, Future]] = []
         node.create_subscription(Movement, "movements", self._on_movement, qos.RECORDS)
 
     def _on_movement(self, msg: Movement) -> None:
-        if msg.process == Movement.PROCESS_EVALUATION or msg.index == 0:
-            return  # evaluation movements are not the learner's experience
-        if msg.index <= self.count:
-            self.node.get_logger().warning(f"movement {msg.index} seen twice; ignored")
+        verdict = self.gate.admit_movement(msg)
+        if not verdict.ok:
+            return
+        if verdict.supersedes:
+            self._supersede(msg)
             return
         for listener in self.before_store:
             listener(msg)
         self._store_deferred(before=msg.index)
+        self._latest_row = None
         if msg.status == Movement.STATUS_OK:
-            why = (check_vector(msg.action, self.action_size, "action", 1.0)
-                   or check_vector(msg.outcome, self.outcome_size, "outcome"))
-            if why:
-                self.node.get_logger().error(f"movement {msg.index} not stored: {why}")
-            else:
-                self.memory.add(vec(msg.action), vec(msg.outcome),
-                                PROCESS_LABELS.get(msg.process, ""))
+            self._latest_row = self.memory.add(vec(msg.action), vec(msg.outcome),
+                                               PROCESS_LABELS.get(msg.process, ""))
         self.count = msg.index
-        self._recent.add(msg)
         for listener in self.after_store:
             listener(msg)
         for needed, future in self._waiters:
             if needed <= self.count and not future.done():
                 future.set_result(True)
         self._waiters = [(n, f) for n, f in self._waiters if not f.done()]
+
+    def _supersede(self, msg: Movement) -> None:
+        """The simulator client re-executed the latest movement: its new record is the one
+        the learner used, in place of the first."""
+        self.node.get_logger().warning(
+            f"movement {msg.index} re-executed (attempt {msg.attempt}): its new record "
+            "replaces the first")
+        ok = msg.status == Movement.STATUS_OK
+        self._latest_row = replace_latest(
+            self.memory, self._latest_row,
+            (vec(msg.action), vec(msg.outcome), PROCESS_LABELS.get(msg.process, "")) if ok
+            else None)
 
     def add_demonstration(self, action: np.ndarray, outcome: np.ndarray) -> str:
         """Store a demonstration as the learner's own experience; '' or why it was refused."""
@@ -97,13 +113,9 @@ class MovementMemory:
         old = point.state.memory
         for action, outcome, label in zip(old.actions, old.outcomes, old.labels, strict=True):
             self.memory.add(action, outcome, label)
-        self.count = point.count
+        self.count = self.gate.movements.count = point.count
         self.node.get_logger().info(f"resumed at movement {self.count} with "
                                     f"{len(self.memory)} pairs in memory")
-
-    def recorded(self, index: int) -> Movement | None:
-        """The record of a recent movement, if it came in (see SimClient)."""
-        return self._recent.recorded(index)
 
     def reached(self, count: int) -> Future:
         """A future done once every movement up to `count` is in memory."""
@@ -113,3 +125,29 @@ class MovementMemory:
         else:
             self._waiters.append((count, future))
         return future
+
+
+def replace_latest(memory: Memory, row: int | None,
+                   pair: tuple[np.ndarray, np.ndarray, str] | None) -> int | None:
+    """Replace the memory's latest movement (row `row`, None when it was not stored) with
+    `pair` (None: a movement without outcome); returns the row of the replacement.
+
+    Only the last row can be replaced: nothing is stored between a movement and its
+    re-execution (the client retries before anything else happens). This reaches into
+    Memory's arrays because the core has no "replace": a Memory method would be its home.
+    """
+    if row is not None and row != len(memory) - 1:
+        raise ValueError(f"row {row} is not the memory's latest ({len(memory) - 1})")
+    if row is None:
+        return None if pair is None else memory.add(*pair)
+    if pair is None:  # the re-execution failed: the first record's pair goes
+        memory._n -= 1
+        memory.labels.pop()
+        if memory._n_indexed > memory._n:
+            memory._rebuild()
+        return None
+    memory._actions[row], memory._outcomes[row] = pair[0], pair[1]
+    memory.labels[row] = pair[2]
+    if row < memory._n_indexed:
+        memory._rebuild()  # the KD-tree indexed the old outcome
+    return row

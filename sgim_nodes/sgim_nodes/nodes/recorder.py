@@ -1,59 +1,81 @@
-"""ROS 2 node that records every topic of a run into a rosbag2 bag (MCAP by default).
+"""ROS 2 node that records every topic of a run into a rosbag2 bag of one MCAP file.
 
-Messages are taken as raw CDR bytes (`raw=True`) and written as they are: no deserialisation
-on the hot path, and the bag holds exactly what crossed the wire. The bag is written by
-bag.writer.SplitBagWriter as a sequence of small finished files, because rosbags' Writer only
-leaves a readable file when closed: a SIGKILL loses at most the open part (`split_messages`
-messages or the last `split_seconds`), Ctrl-C, SIGINT and SIGTERM lose nothing (the part is
-closed in a finally). A final RunStatus (FINISHED or ABORTED) ends the recording once the
-movements up to its count are in (topics race each other) and the graph has been quiet for
-`finish_grace` (30 s at most).
+Messages are taken as raw CDR bytes (`raw=True`) and written as they are: the bag holds exactly
+what crossed the wire, rogue records included, so an audit can see an attack. The bag is one
+storage file written by bag.writer.BagWriter in chunks: every `chunk_seconds` or
+`chunk_messages` the chunk is closed and flushed, so a SIGKILL loses at most that much and the
+file reads up to its last chunk; Ctrl-C, SIGINT and SIGTERM lose nothing (the file is closed in
+a finally, with its summary and metadata.yaml).
 
-Measured (benchmarks/bench_recorder.py, defaults 0.5 s / 250 messages, 2 shared cores):
-about 4,300 movements/s recorded from a 5,000-message burst, none dropped; SIGKILL at random
-moments lost at worst 30 movements at 50 movements/s (a real run's pace) and 229 at
-1,000 movements/s, within the design bound min(split_messages, rate x (split_seconds + timer
-tick 0.125 s)) plus what DDS still had in flight.
+Every record is also validated as the readers and the live nodes validate it
+(bag/validation.py, with the run's limits from the shared parameter file). A record that fails
+is recorded all the same, logged with its topic, index and reason, and counted; the counts go
+to `<output>.quarantine.yaml` beside the bag (rewritten as they change, and at the end), which
+the launcher copies into metadata.yaml. Only a valid final RunStatus ends the recording: once
+the valid movements up to its count are in (topics race each other) and the graph has been
+quiet for `finish_grace` (30 s at most).
+
+A write error (a full disk, a file-size limit, an I/O error) ends the node at once with exit
+code 3 (WRITE_FAILED) after logging why and how much the bag holds; the quarantine file says
+it too (`write_error`), so the launcher fails the run with the reason.
+
+Measured (benchmarks/bench_recorder.py): see README, "Reliability".
 
 Interfaces (relative names, see docs/node_graph.md):
-  subscribes  movements, goals, competences, demonstrations, evaluations, run_status (RECORDS),
-              region_map (LATEST_STATE durability, keep-all so no map is skipped)
-Parameters: output, storage, split_seconds, split_messages, stop_on_finish, finish_grace.
+  subscribes  every topic of bag.types.TOPICS (RECORDS), region_map (LATEST_STATE durability,
+              keep-all so no map is skipped)
+  serves      recorder_ready (sgim_msgs/srv/RecorderReady)
+Parameters: see PARAMS (and `recorder --help`).
 """
 
 from __future__ import annotations
 
 import importlib
+import os
 import sys
 import time
+from pathlib import Path
 
+import yaml
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile
 from rclpy.serialization import deserialize_message
 
-from sgim_msgs.msg import Movement, RunStatus
+from sgim_msgs.msg import RunStatus
 from sgim_msgs.srv import RecorderReady
+from sgim_nodes.bag.run_folder import QUARANTINE_SUFFIX
 from sgim_nodes.bag.types import STATE_TOPICS, TOPICS
-from sgim_nodes.bag.writer import STORAGES, BagWriteError, SplitBagWriter
+from sgim_nodes.bag.validation import LIMITS_KEY, Limits, RunValidator, teaching_set_size
+from sgim_nodes.bag.writer import STORAGES, BagWriteError, BagWriter
 from sgim_ros import qos
 from sgim_ros.entry import run_node
-from sgim_ros.params import Param, declare, one_of, positive
+from sgim_ros.params import Param, declare, non_negative, one_of, positive
 
 FINISH_LIMIT = 30.0  # seconds after the final status at which the recorder stops regardless
+WRITE_FAILED = 3  # exit code: the bag could not be written (the launcher fails the run)
+LOGGED_QUARANTINES = 20  # quarantined records logged one by one; then counted only
 PARAMS = (
     Param("output", "", "bag directory to create", lambda v: bool(v.strip()),
           "a path that does not exist yet"),
     Param("storage", "mcap", "storage format of the bag", one_of(*STORAGES),
           f"one of {', '.join(STORAGES)}"),
-    Param("split_seconds", 0.5, "a bag part is finished at least this often while messages "
-          "arrive (worst-case loss on SIGKILL in time)", positive, "> 0"),
-    Param("split_messages", 250, "a bag part is finished after this many messages (worst-case "
-          "loss on SIGKILL in messages)", lambda v: v >= 1, ">= 1"),
-    Param("stop_on_finish", True, "finish the bag and exit 0 after a FINISHED or ABORTED "
+    Param("chunk_seconds", 0.5, "the open chunk is closed and flushed at least this often "
+          "while messages arrive (worst-case loss on SIGKILL, in time)", positive, "> 0"),
+    Param("chunk_messages", 250, "the open chunk is closed and flushed after this many "
+          "messages (worst-case loss on SIGKILL, in messages)", lambda v: v >= 1, ">= 1"),
+    Param("stop_on_finish", True, "close the bag and exit 0 after a valid FINISHED or ABORTED "
           "run status, once the movements up to its count are recorded"),
     Param("finish_grace", 1.0, "seconds without messages after the final run status before "
           f"exiting, so that trailing messages are recorded (at most {FINISH_LIMIT:.0f} s)",
           positive, "> 0"),
+    # The run's limits, to validate records as every reader will (the shared parameter file
+    # gives the run's own; 0 = unknown, that check is skipped).
+    Param("movements", 0, "the run's movement budget, to validate indices (0: unknown)",
+          non_negative, ">= 0"),
+    Param("action_size", 24, "numbers per action", lambda v: v >= 1, ">= 1"),
+    Param("outcome_size", 2, "numbers per outcome", lambda v: v >= 1, ">= 1"),
+    Param("teaching_set", "", "the teacher's teaching-set file (empty: the packaged one), to "
+          "validate teaching-set indices"),
 )
 FINAL_STATES = (RunStatus.STATE_FINISHED, RunStatus.STATE_ABORTED)
 PROGRESS_PERIOD = 10.0  # seconds between progress lines in the log
@@ -82,41 +104,55 @@ def topic_qos(topic: str, *, keep_all: bool = False) -> QoSProfile:
     )
 
 
+def quarantine_file(output: str | Path) -> Path:
+    """Where the recorder of bag `output` writes its quarantine counts (the launcher reads
+    it): beside the bag, in the run folder, e.g. runs/x/bag.quarantine.yaml."""
+    output = Path(output)
+    return output.with_name(output.name + QUARANTINE_SUFFIX)
+
+
 class RecorderNode(Node):
     def __init__(self) -> None:
         super().__init__("recorder")
         p = declare(self, PARAMS)
         self.stop_on_finish = p["stop_on_finish"]
         self.finish_grace = p["finish_grace"]
-        self.bag = SplitBagWriter(
-            p["output"], storage=p["storage"], split_seconds=p["split_seconds"],
-            split_messages=p["split_messages"],
-        )
+        self.bag = BagWriter(p["output"], storage=p["storage"],
+                             chunk_seconds=p["chunk_seconds"],
+                             chunk_messages=p["chunk_messages"])
+        self.validator = RunValidator(Limits(
+            action_size=p["action_size"], outcome_size=p["outcome_size"],
+            budget=p["movements"], teaching_set_size=teaching_set_size(p["teaching_set"] or None)))
+        # Readers of this bag validate with the same limits (bag.reader.limits_for).
+        self.bag.custom_data[LIMITS_KEY] = self.validator.limits.to_json()
+        self._quarantine_path = quarantine_file(self.bag.path)
+        self._quarantine_written = -1
         self.counts: dict[str, int] = {}
-        self.errors = 0
+        self.write_error = ""
+        self.finished, self.exit_code = False, 0
         self._finish_at: float | None = None
         self._finish_limit = 0.0
-        self._last_movement: bytes | None = None
-        self._max_index = 0  # highest movement index seen, tracked once the run is over
         self._target_index = 0  # the final RunStatus' movement count
         self._last_progress = time.monotonic()
         self._names: dict[str, str] = {}
+        self._classes: dict[str, type] = {}
         self._record_subs: dict[str, object] = {}
         for name, msgtype in TOPICS.items():
+            self._classes[name] = ros_message_class(msgtype)
             sub = self._record_subs[name] = self.create_subscription(
-                ros_message_class(msgtype), name,
+                self._classes[name], name,
                 lambda raw, topic=name: self._on_message(topic, raw),
                 topic_qos(name, keep_all=True), raw=True,
             )
             self._names[name] = sub.topic_name  # resolved: the namespace is recorded too
             self.bag.add_topic(sub.topic_name, msgtype)
             self.counts[name] = 0
-        self.create_timer(min(0.25, p["split_seconds"] / 4), self._tick)
+        self.create_timer(min(0.25, p["chunk_seconds"] / 4), self._tick)
         self.create_service(RecorderReady, "recorder_ready", self._ready)
+        self._write_quarantine()
         self.get_logger().info(
-            f"recording {len(TOPICS)} topics into {self.bag.path} ({p['storage']}, a part every "
-            f"{p['split_seconds']} s or {p['split_messages']} messages)"
-        )
+            f"recording {len(TOPICS)} topics into {self.bag.file} ({p['storage']}, flushed "
+            f"every {p['chunk_seconds']} s or {p['chunk_messages']} messages)")
 
     def _ready(self, request: RecorderReady.Request, response: RecorderReady.Response):
         """Matched, not merely discovered: only a matched publisher's messages reach the bag."""
@@ -131,28 +167,43 @@ class RecorderNode(Node):
         return response
 
     def _on_message(self, name: str, raw: bytes) -> None:
+        if self.finished:
+            return
         now = self.get_clock().now().nanoseconds
         try:
             self.bag.write(self._names[name], now, raw)
-        except Exception as error:  # a disk error must not end the recording
-            self.errors += 1
-            self.get_logger().error(f"could not write a {name} message: {error}")
+        except Exception as error:
+            self._fail(f"could not write a {name} message: {type(error).__name__}: {error}")
             return
         self.counts[name] += 1
-        if name == "movements":
-            self._last_movement = raw
-            if self._finish_at is not None:
-                self._max_index = max(self._max_index, self._movement_index(raw))
+        self._validate(name, raw, now)
         if self._finish_at is not None:  # trailing messages push the exit back
             self._finish_at = time.monotonic() + self.finish_grace
-        if name == "run_status" and self.stop_on_finish and self._finish_at is None:
-            status = deserialize_message(raw, RunStatus)
-            if status.state in FINAL_STATES:
-                self._start_finishing(status)
 
-    @staticmethod
-    def _movement_index(raw: bytes) -> int:
-        return int(deserialize_message(raw, Movement).index)
+    def _validate(self, name: str, raw: bytes, now: int) -> None:
+        try:
+            message = deserialize_message(raw, self._classes[name])
+        except Exception as error:
+            from sgim_nodes.bag.validation import Problem
+
+            self.validator.quarantine(name, -1, Problem("undecodable", str(error)), now)
+            self._log_quarantine()
+            return
+        verdict = self.validator.admit(name, message, now)
+        if not verdict.ok:
+            self._log_quarantine()
+        elif (name == "run_status" and self.stop_on_finish and self._finish_at is None
+              and message.state in FINAL_STATES):
+            self._start_finishing(message)
+
+    def _log_quarantine(self) -> None:
+        n = len(self.validator.quarantined)
+        if n <= LOGGED_QUARANTINES:
+            self.get_logger().warning(f"{self.validator.quarantined[-1]} (recorded in the bag, "
+                                      "left out by every reader)")
+            if n == LOGGED_QUARANTINES:
+                self.get_logger().warning("further quarantined records are counted in "
+                                          f"{self._quarantine_path.name}, not logged")
 
     def _start_finishing(self, status: RunStatus) -> None:
         """Exit once the movements up to the status' count are in (topics race each other)
@@ -161,48 +212,87 @@ class RecorderNode(Node):
         self._finish_limit = start + max(FINISH_LIMIT, 10 * self.finish_grace)
         self._finish_at = start + self.finish_grace
         self._target_index = int(status.movement_index)
-        if self._last_movement is not None:
-            self._max_index = self._movement_index(self._last_movement)
         self.get_logger().info(
             f"run over (state {status.state} at movement {status.movement_index}): "
             "finishing the bag")
 
     def _tick(self) -> None:
+        if self.finished:
+            return
         try:
-            self.bag.maybe_split()
+            self.bag.maybe_checkpoint()
         except Exception as error:
-            self.errors += 1
-            self.get_logger().error(f"could not finish a bag part: {error}")
+            self._fail(f"could not flush the bag: {type(error).__name__}: {error}")
+            return
+        if len(self.validator.quarantined) != self._quarantine_written:
+            self._write_quarantine()
         if time.monotonic() - self._last_progress >= PROGRESS_PERIOD:
             self._last_progress = time.monotonic()
             self.get_logger().info(f"recorded {self.summary()}")
+        if self._finish_at is not None and self._done():
+            self.finished = True
 
-    @property
-    def finished(self) -> bool:
-        if self._finish_at is None:
-            return False
+    def _done(self) -> bool:
         now = time.monotonic()
+        count = self.validator.movements.count
         if now >= self._finish_limit:
-            if self._max_index < self._target_index:
+            if count < self._target_index:
                 self.get_logger().warning(
-                    f"stopping without movements {self._max_index + 1}..{self._target_index}")
+                    f"stopping without movements {count + 1}..{self._target_index}")
             return True
-        return now >= self._finish_at and self._max_index >= self._target_index
+        return now >= self._finish_at and count >= self._target_index
+
+    def _fail(self, why: str) -> None:
+        """A write error: stop recording now, say why, exit WRITE_FAILED."""
+        self.write_error = why
+        self.finished, self.exit_code = True, WRITE_FAILED
+        self.bag.abort()
+        self.get_logger().error(
+            f"{why}: recording stopped. The bag holds {self.bag.messages_durable} messages, "
+            f"readable up to its last flushed chunk ({self.bag.file}); exit code {WRITE_FAILED}")
+        self._write_quarantine()
+
+    def _write_quarantine(self) -> None:
+        """The counts the launcher puts into metadata.yaml (atomic replace; best effort)."""
+        v = self.validator
+        report = {
+            "segment": self.bag.path.name,
+            "received": dict(self.counts),
+            "quarantined": v.counts(),
+            "total_quarantined": len(v.quarantined),
+            "re_executed_movements": list(v.superseded),
+            "first_quarantined": [str(q) for q in v.quarantined[:LOGGED_QUARANTINES]],
+            "write_error": self.write_error or None,
+        }
+        tmp = self._quarantine_path.with_name(f".{self._quarantine_path.name}.{os.getpid()}")
+        try:
+            tmp.write_text(yaml.safe_dump(report, sort_keys=False), encoding="utf-8")
+            os.replace(tmp, self._quarantine_path)
+            self._quarantine_written = len(v.quarantined)
+        except OSError as error:  # a full disk: the log and the exit code still say it
+            tmp.unlink(missing_ok=True)
+            if not self.write_error:
+                self.get_logger().warning(f"could not write {self._quarantine_path}: {error}")
 
     def summary(self) -> str:
         counts = ", ".join(f"{n} {k}" for k, n in self.counts.items() if n)
-        return f"{self.bag.messages_written} messages ({counts or 'none'})"
+        quarantined = len(self.validator.quarantined)
+        return (f"{self.bag.messages_written} messages ({counts or 'none'})"
+                + (f", {quarantined} quarantined" if quarantined else ""))
 
     def close_bag(self) -> None:
-        self.bag.close()
-        self.get_logger().info(f"bag {self.bag.path} closed: {self.summary()}")
-
-    @property
-    def exit_code(self) -> int:
-        return 1 if self.errors else 0
+        if self.write_error:
+            return
+        try:
+            self.bag.close()
+        except Exception as error:
+            self._fail(f"could not close the bag: {type(error).__name__}: {error}")
+            return
+        self._write_quarantine()
+        self.get_logger().info(f"bag {self.bag.file} closed: {self.summary()}")
 
     def destroy_node(self) -> None:
-        self.close_bag()  # however the node ends: the open part becomes a finished file
+        self.close_bag()  # however the node ends: the file gets its summary
         super().destroy_node()
 
 
@@ -210,8 +300,9 @@ def _usage() -> str:
     lines = [
         "usage: recorder [--ros-args -p NAME:=VALUE ...]",
         "",
-        "Record every topic of a run (docs/node_graph.md) into a rosbag2 bag.",
+        "Record every topic of a run (docs/node_graph.md) into a rosbag2 bag of one MCAP file.",
         "Example: ros_ws/ros2run.sh sgim_nodes recorder --ros-args -p output:=runs/run1",
+        f"Exit codes: 0 done, 2 bad parameters, {WRITE_FAILED} the bag could not be written.",
         "",
         "parameters:",
     ]
@@ -227,7 +318,7 @@ def main(args: list[str] | None = None) -> int:
                                                 if "--ros-args" in argv else None]):
         print(_usage())
         return 0
-    return run_node(RecorderNode, args, refusals=(BagWriteError,))
+    return run_node(RecorderNode, args, refusals=(BagWriteError, OSError))
 
 
 if __name__ == "__main__":

@@ -14,6 +14,7 @@ from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.node import Node
 
 from sgim_msgs.msg import Region, RegionMap
+from sgim_nodes.bag.validation import vector_problem
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS  # noqa: F401 - for nodes
 from sgim_nodes.core.learners import LEARNER_NAMES
@@ -66,16 +67,11 @@ def floats(array: np.ndarray | Sequence[float] | None) -> list[float]:
     return [] if array is None else [float(v) for v in np.asarray(array, dtype=float).ravel()]
 
 
-def check_vector(values: Sequence[float], size: int, what: str, bound: float | None = None) -> str:
-    """Why a vector from a message is unusable, or '' when it is fine."""
-    v = np.asarray(values, dtype=float)
-    if v.shape != (size,):
-        return f"{what} must have {size} numbers, got {v.size}"
-    if not np.all(np.isfinite(v)):
-        return f"{what} has NaN or infinite numbers"
-    if bound is not None and np.any(np.abs(v) > bound):
-        return f"{what} numbers must lie in [-{bound:g}, {bound:g}]"
-    return ""
+def check_vector(values: Sequence[float], size: int, what: str, bound: float = 1.0) -> str:
+    """Why a vector from a message is unusable, or '' when it is fine: the readers' check
+    (bag/validation.py); actions, outcomes and goals all live in [-1, 1]."""
+    problem = vector_problem(values, size, what, bound)
+    return "" if problem is None else problem.detail
 
 
 COMMON_PARAMS = (

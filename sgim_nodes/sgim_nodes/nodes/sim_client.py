@@ -2,13 +2,18 @@
 
 A learning run must not lose or double a movement when the simulator node dies: if no answer
 comes within the timeout, the client waits for the service to come back and sends the same
-request again, unless the movement was in fact executed and recorded before the crash (then
-the recorded result is used, so the movement is counted once).
+request again with `attempt` + 1. The record of that re-execution carries its attempt number:
+it supersedes an earlier record of the same index for every node and every bag reader
+(bag/validation.py), never "the last record wins".
+
+Why always execute again, even when a record of the first execution came in: a dying
+simulator's last record may have reached some subscribers and not others (the recorder and
+the explorer, say, but not the evaluator). Only a new record, published by a live simulator
+to every subscriber, gives every node the same movement; without it a node that missed the
+first record would wait for that index forever (or, leniently, learn without it).
 """
 
 from __future__ import annotations
-
-from collections.abc import Callable
 
 from rclpy.node import Node
 from rclpy.task import Future
@@ -28,11 +33,9 @@ class SimulatorError(RuntimeError):
 
 
 class SimClient:
-    def __init__(self, node: Node, timeout: float,
-                 recorded: Callable[[int], Movement | None] | None = None) -> None:
+    def __init__(self, node: Node, timeout: float) -> None:
         self.node = node
         self.timeout = timeout
-        self.recorded = recorded
         self.client = node.create_client(ExecuteAction, "execute_action")
         self.retries = 0
 
@@ -44,14 +47,12 @@ class SimClient:
                     if response.status == Movement.STATUS_INVALID_ACTION:
                         raise SimulatorError(response.message)
                     return response
+                # Sent but unanswered: a new call executes the movement again, and its record
+                # says so, so that every node and reader takes that later record as the one
+                # the learner used (bag/validation.py).
+                request.attempt = min(request.attempt + 1, 255)
             else:
                 await self._sleep(0.2)
-            movement = self.recorded(request.movement_index) if self.recorded else None
-            if movement is not None and request.movement_index > 0:
-                self.node.get_logger().warning(
-                    f"simulator did not answer for movement {request.movement_index}, "
-                    "but recorded it: using the record")
-                return ExecuteAction.Response(status=movement.status, outcome=movement.outcome)
             self.retries += 1
             self.node.get_logger().warning(
                 f"no answer from execute_action for movement {request.movement_index}; "
@@ -67,20 +68,3 @@ class SimClient:
 
     async def _sleep(self, seconds: float) -> None:
         await first_of(self.node, Future(), seconds)
-
-
-class RecentMovements:
-    """The last few movement records, for SimClient's "was it executed before the crash?".
-
-    Feed it from a `movements` subscription with `add`."""
-
-    def __init__(self, keep: int = 16) -> None:
-        self.keep = keep
-        self._recent: dict[int, Movement] = {}
-
-    def add(self, msg: Movement) -> None:
-        self._recent[msg.index] = msg
-        self._recent.pop(msg.index - self.keep, None)
-
-    def recorded(self, index: int) -> Movement | None:
-        return self._recent.get(index)

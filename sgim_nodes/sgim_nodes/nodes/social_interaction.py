@@ -15,9 +15,16 @@ the teacher's boundaries, then waits for its word (a demonstration, or an empty 
 nothing left to show), which makes a run reproducible; with a human teacher demonstrations come
 at any time and the running job is cancelled, honoured at its next movement boundary.
 
+The budget is exact: an imitation is cut to the movements left, and a demonstration that is
+invalid (bag/validation.py: sizes, bounds, a known teaching-set index) or comes once the
+budget is spent is refused, logged and announced on run_status (it stays in the bag). Each
+demonstration the learner takes is republished on `demonstrations_taken` with the count at
+which it entered the learner's memory: the evaluator and the bag readers use those only.
+
 Interfaces:
   subscribes  demonstrations (Demonstration), evaluations (Evaluation)
-  publishes   competences (Competence, for demonstrated goals), run_status (RunStatus)
+  publishes   competences (Competence, for demonstrated goals), run_status (RunStatus),
+              demonstrations_taken (Demonstration)
   clients of  choose_goal, register_demonstration, execute_action; actions reach_goal, imitate
 Parameters: the common ones, every LearnerConfig field, movements, teacher,
 demonstration_period, wait_for_evaluation, wait_for_recorder, timeouts.
@@ -37,12 +44,12 @@ from sgim_msgs.msg import Competence, Demonstration, Evaluation, Movement, RunSt
 from sgim_msgs.srv import ChooseGoal, ExecuteAction, RecorderReady, RegisterDemonstration
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.bag.types import TOPICS as RECORD_TOPICS
+from sgim_nodes.bag.validation import Limits, LiveGate, teaching_set_size
 from sgim_nodes.core.competence import competence
 from sgim_nodes.core.learners import GOAL_BABBLERS
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.nodes.ros_glue import (
     AsyncNode,
-    check_vector,
     declare_learner,
     floats,
     run_node,
@@ -81,6 +88,8 @@ class SocialInteraction(AsyncNode):
             SERVICE_TIMEOUT,
             Param("settle_time", 2.0, "seconds of discovery settling before the start",
                   non_negative, ">= 0"),
+            Param("teaching_set", "", "the teacher's teaching-set file (empty: the packaged "
+                  "one), to validate demonstrations' teaching-set indices"),
         ))
         self.p = values
         self.learner = values["learner"]
@@ -111,6 +120,11 @@ class SocialInteraction(AsyncNode):
         self.reach = ActionClient(self, ReachGoal, "reach_goal")
         self.imitate = ActionClient(self, Imitate, "imitate")
         self._status = self.create_publisher(RunStatus, "run_status", qos.RECORDS)
+        self._taken = self.create_publisher(Demonstration, "demonstrations_taken", qos.RECORDS)
+        self.gate = LiveGate(self.get_logger().error, Limits(
+            values["action_size"], values["outcome_size"], budget=self.total,
+            teaching_set_size=teaching_set_size(values["teaching_set"] or None)))
+        self.refused = 0  # demonstrations refused (invalid or late)
         self._competences = self.create_publisher(Competence, "competences", qos.RECORDS)
         self.create_subscription(Demonstration, "demonstrations", self._on_demo, qos.RECORDS)
         self.create_subscription(Evaluation, "evaluations", self._on_evaluation, qos.RECORDS)
@@ -136,8 +150,15 @@ class SocialInteraction(AsyncNode):
     def _on_demo(self, msg: Demonstration) -> None:
         if not self.social:
             return
+        problem = self.gate.check("demonstrations", msg)
+        if problem is not None:
+            self._refuse(msg, problem.detail)
+            return
         if self.sync_period and msg.source == "automatic":
             self.boundary_word[msg.movement_index] = msg
+        elif self.count >= self.total and len(msg.action):
+            self._refuse(msg, f"it came after the movement budget of {self.total} was spent",
+                         always=True)
         elif len(msg.action):
             self.pending.append(msg)
             if self._job is not None:  # preempt: honoured at the job's next movement boundary
@@ -145,6 +166,8 @@ class SocialInteraction(AsyncNode):
         self._wake()
 
     def _on_evaluation(self, msg: Evaluation) -> None:
+        if self.gate.check("evaluations", msg):
+            return
         self.evaluated.add(msg.movement_index)
         self._wake()
 
@@ -170,10 +193,16 @@ class SocialInteraction(AsyncNode):
             self._publish_status(RunStatus.STATE_RUNNING,
                                  f"resumed at {self.count}" if self.count else "started")
             await self._run()
+            while self.pending:  # demonstrations that waited in vain
+                self._refuse(self.pending.popleft(), "the movement budget was spent while it "
+                             "waited for its turn")
             self._publish_status(RunStatus.STATE_RUNNING, "movement budget spent")
             if self.p["wait_for_evaluation"]:
                 await self._until(lambda: self.total in self.evaluated, 600.0,
                                   f"the evaluation at movement {self.total}")
+            if self.refused:
+                self._publish_status(RunStatus.STATE_RUNNING, f"{self.refused} demonstrations "
+                                     "refused in all (see the arbiter's log)")
             self._publish_status(RunStatus.STATE_FINISHED, "finished")
             self.get_logger().info(f"run finished: {self.count} movements in "
                                    f"{time.monotonic() - self._started:.1f} s")
@@ -261,23 +290,24 @@ class SocialInteraction(AsyncNode):
             self._progress()
 
     async def _take_demonstration(self, demo: Demonstration) -> None:
-        why = (check_vector(demo.action, self.p["action_size"], "demonstrated action", 1.0)
-               or check_vector(demo.outcome, self.p["outcome_size"], "demonstrated outcome"))
-        if why:
-            self.get_logger().error(f"ignored demonstration {demo.index}: {why}")
+        if self.count >= self.total:
+            self._refuse(demo, f"the movement budget of {self.total} is spent")
             return
         self.get_logger().info(f"demonstration {demo.index} at movement {self.count} "
                                f"(outcome {floats(demo.outcome)})")
         if self.learner == "demo-only":
             self.latest_demo = demo
+            self._publish_taken(demo)
             return
         reply = await self.register_client.call_async(
             RegisterDemonstration.Request(demonstration=demo))
         if not reply.accepted:
-            self.get_logger().error(f"explorer refused demonstration {demo.index}: "
-                                    f"{reply.message}")
+            self._refuse(demo, f"the explorer refused it: {reply.message}")
             return
-        result = await self._imitation(demo, self.config.imitation_count)
+        self._publish_taken(demo)
+        # The imitation never runs past the budget (the single-process runner stops there).
+        result = await self._imitation(demo, min(self.config.imitation_count,
+                                                 self.total - self.count))
         if result is not None and result.movements_used > 0:
             goal = vec(demo.outcome)
             comp = -1.0
@@ -331,6 +361,24 @@ class SocialInteraction(AsyncNode):
             action=floats(self.rng.uniform(-1.0, 1.0, self.p["action_size"])),
             process=Movement.PROCESS_RANDOM, movement_index=index, record=True))
         self.count = index
+
+    def _publish_taken(self, demo: Demonstration) -> None:
+        """The learner's memory holds it from now on (after movement `count`)."""
+        self._taken.publish(Demonstration(
+            stamp=self.get_clock().now().to_msg(), index=demo.index, movement_index=self.count,
+            action=demo.action, outcome=demo.outcome,
+            teaching_set_index=demo.teaching_set_index, source=demo.source))
+
+    def _refuse(self, demo: Demonstration, why: str, always: bool = False) -> None:
+        """A demonstration the learner does not take: said in the log and on run_status
+        (a burst: the first 20 and every 100th, then a total at the end; one given once the
+        budget was spent, always)."""
+        self.refused += 1
+        line = f"demonstration {demo.index} ({demo.source}) refused: {why}"
+        always = always or demo.movement_index >= self.total  # a late one is always said
+        if always or self.refused <= 20 or self.refused % 100 == 0:
+            self.get_logger().warning(line + f" ({self.refused} refused so far)")
+            self._publish_status(RunStatus.STATE_RUNNING, line)
 
     # --- progress -------------------------------------------------------------------------
     def _progress(self) -> None:

@@ -1,0 +1,153 @@
+"""The one validation of records: each rogue record of issue 12 is refused with its reason."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sgim_nodes.bag.validation import (
+    IndexSequence,
+    Limits,
+    RunValidator,
+    check,
+    summarise,
+    teaching_set_size,
+)
+from tests.bag import samples
+
+LIMITS = Limits(action_size=24, outcome_size=2, budget=300, teaching_set_size=26)
+RNG = np.random.default_rng(0)
+
+
+def kind(topic, record, limits=LIMITS):
+    problem = check(topic, record, limits)
+    return None if problem is None else problem.kind
+
+
+def test_a_synthetic_run_passes_every_check():
+    validator = RunValidator(Limits(budget=60, teaching_set_size=26))
+    for topic, msg in samples.synthetic_run(60):
+        assert validator.admit(topic, msg).ok, (topic, validator.quarantined)
+    assert validator.quarantined == [] and validator.counts() == {}
+
+
+@pytest.mark.parametrize("action, outcome, expected", [
+    ([np.nan] + [0.0] * 23, [0.1, 0.1], "non-finite"),
+    ([np.inf] + [0.0] * 23, [0.1, 0.1], "non-finite"),
+    ([0.1] * 5, [0.1, 0.1], "size"),
+    ([0.1] * 24, [1e300, -1e300], "out-of-bounds"),
+    ([1.5] + [0.0] * 23, [0.1, 0.1], "out-of-bounds"),
+    ([0.1] * 24, [0.1, 0.1, 0.1], "size"),
+])
+def test_bad_demonstrations_are_refused(action, outcome, expected):
+    demo = samples.demonstration(1, 30, RNG)
+    demo.action, demo.outcome = np.asarray(action), np.asarray(outcome)
+    assert kind("demonstrations", demo) == expected
+
+
+@pytest.mark.parametrize("teaching_index, expected", [
+    (2**31 - 1, "unknown-teaching-index"), (-7, "unknown-teaching-index"),
+    (26, "unknown-teaching-index"), (25, None), (-1, None)])
+def test_a_teaching_index_must_name_an_entry(teaching_index, expected):
+    demo = samples.demonstration(1, 30, RNG)
+    demo.teaching_set_index = teaching_index
+    assert kind("demonstrations", demo) == expected
+
+
+def test_the_teachers_empty_word_is_valid_and_an_unknown_source_is_not():
+    demo = samples.demonstration(0, 150, RNG)
+    demo.action, demo.outcome, demo.index = np.zeros(0), np.zeros(0), 0
+    assert kind("demonstrations", demo) is None
+    demo.source = "rogue"
+    assert kind("demonstrations", demo) == "bad-value"
+
+
+def test_the_packaged_teaching_set_is_known():
+    assert teaching_set_size() == 26
+    assert teaching_set_size("/no/such/file.npz") == 0
+
+
+@pytest.mark.parametrize("goal, value, expected", [
+    ([0.1, 0.1], np.nan, "non-finite"), ([0.1, 0.1], -1e9, "out-of-bounds"),
+    ([0.1, 0.1], 0.5, "out-of-bounds"), ([0.1, 0.1, 0.1], -0.5, "size"),
+    ([2.0, 0.0], -0.5, "out-of-bounds"), ([0.1, 0.1], -0.5, None)])
+def test_bad_competences_are_refused(goal, value, expected):
+    comp = samples.competence(1, 10, RNG)
+    comp.goal, comp.competence = np.asarray(goal), value
+    assert kind("competences", comp) == expected
+
+
+def test_bad_movements_are_refused():
+    good = samples.movement(1, RNG)
+    assert kind("movements", good) is None
+    nan = samples.movement(1, RNG)
+    nan.outcome = np.array([np.nan, 0.0])
+    assert kind("movements", nan) == "non-finite"
+    outside = samples.movement(1, RNG)
+    outside.action = np.full(24, 1.01)
+    assert kind("movements", outside) == "out-of-bounds"
+    failed_with_outcome = samples.movement(1, RNG, status=1)
+    failed_with_outcome.outcome = np.array([0.1, 0.1])
+    assert kind("movements", failed_with_outcome) == "size"
+    evaluation = samples.movement(1, RNG, process=5)
+    assert kind("movements", evaluation) == "bad-value"
+    beyond = samples.movement(301, RNG)
+    assert kind("movements", beyond) == "beyond-budget"
+    assert kind("movements", samples.movement(0, RNG)) == "bad-value"
+
+
+def test_evaluations_statuses_and_maps_are_checked():
+    evaluation = samples.evaluation(100, RNG)
+    assert kind("evaluations", evaluation) is None  # a NaN row: a cast with no touch-down
+    evaluation.reached = np.full(6, 5.0)  # a touch-down on land may lie outside [-1, 1]^2
+    assert kind("evaluations", evaluation) is None
+    evaluation.mean_distance = 0.0
+    assert kind("evaluations", evaluation) == "bad-value"
+    short = samples.evaluation(100, RNG)
+    short.distances = short.distances[:2]
+    assert kind("evaluations", short) == "size"
+    status = samples.run_status(10, 300, 0)
+    assert kind("run_status", status) is None
+    status.total_movements = 400  # not this run's budget
+    assert kind("run_status", status) == "bad-value"
+    region_map = samples.region_map(10, split=True)
+    assert kind("region_map", region_map) is None
+    region_map.regions[1].upper = np.array([np.inf, 1.0])
+    assert kind("region_map", region_map) == "non-finite"
+
+
+def test_movement_indices_follow_the_runs_count():
+    seq = IndexSequence("movement")
+    assert seq.admit(1).ok and seq.admit(2).ok
+    assert seq.admit(2_000_000).problem.kind == "jumps-ahead"
+    assert seq.admit(int(1e9)).problem.kind == "jumps-ahead"
+    assert seq.count == 2
+    assert seq.admit(2).problem.kind == "duplicate"  # same attempt: not a re-execution
+    assert seq.admit(1, attempt=1).problem.kind == "duplicate"  # not the latest movement
+    verdict = seq.admit(2, attempt=1)  # the simulator client retried movement 2
+    assert verdict.ok and verdict.supersedes
+    assert seq.admit(2, attempt=1).problem.kind == "duplicate"
+    assert seq.admit(3).ok
+    seq.resync()  # a damaged part of the bag was skipped
+    assert seq.admit(10).ok and seq.admit(11).ok and seq.admit(13).problem.kind == "jumps-ahead"
+
+
+def test_the_validator_counts_by_topic_and_kind_and_summarises():
+    validator = RunValidator(LIMITS)
+    for i in (1, 2, 3):
+        assert validator.admit("/movements", samples.movement(i, RNG)).ok
+    for i in (2, 3, 9):
+        validator.admit("/movements", samples.movement(i, RNG))
+    comp = samples.competence(1, 3, RNG)
+    comp.competence = float("nan")
+    validator.admit("/competences", comp)
+    assert validator.counts() == {"competences": {"non-finite": 1},
+                                  "movements": {"duplicate": 2, "jumps-ahead": 1}}
+    lines = summarise(validator.quarantined, limit=2)
+    assert lines[0].startswith("movements record 2 quarantined: movement 2 again")
+    assert lines[-1] == "... and 2 more: 1 movements (jumps-ahead), 1 competences (non-finite)"
+
+
+def test_limits_come_from_a_runs_parameters():
+    limits = Limits.for_run({"movements": 450, "action_size": 24, "outcome_size": 2})
+    assert limits.budget == 450 and limits.teaching_set_size == 26
