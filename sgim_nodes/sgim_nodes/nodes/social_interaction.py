@@ -13,7 +13,9 @@ A demonstration preempts the intrinsic loop at the next movement boundary: with 
 teacher (`teacher: automatic`) the arbiter knows the teacher's period and stops every job at
 the teacher's boundaries, then waits for its word (a demonstration, or an empty one when it has
 nothing left to show), which makes a run reproducible; with a human teacher demonstrations come
-at any time and the running job is cancelled, honoured at its next movement boundary.
+at any time and the running job is cancelled, honoured at its next movement boundary; a human
+teacher can also pause, resume and step the run and be given a turn every P movements
+(`wait_for_teacher`; see pace.py).
 
 The budget is exact: an imitation is cut to the movements left, and a demonstration that is
 invalid (bag/validation.py: sizes, bounds, a known teaching-set index) or comes once the
@@ -24,10 +26,11 @@ which it entered the learner's memory: the evaluator and the bag readers use tho
 Interfaces:
   subscribes  demonstrations (Demonstration), evaluations (Evaluation)
   publishes   competences (Competence, for demonstrated goals), run_status (RunStatus),
-              demonstrations_taken (Demonstration)
+              demonstrations_taken (Demonstration), pace_state (PaceState; human teacher only)
+  serves      pace (Pace; human teacher only)
   clients of  choose_goal, register_demonstration, execute_action; actions reach_goal, imitate
 Parameters: the common ones, every LearnerConfig field, movements, teacher,
-demonstration_period, wait_for_evaluation, wait_for_recorder, timeouts.
+demonstration_period, wait_for_teacher, wait_for_evaluation, wait_for_recorder, timeouts.
 """
 
 from __future__ import annotations
@@ -43,11 +46,12 @@ from sgim_msgs.action import Imitate, ReachGoal
 from sgim_msgs.msg import Competence, Demonstration, Evaluation, Movement, RunStatus
 from sgim_msgs.srv import ChooseGoal, ExecuteAction, RecorderReady, RegisterDemonstration
 from sgim_nodes.bag.resume import resume_point
-from sgim_nodes.bag.types import TOPICS as RECORD_TOPICS
+from sgim_nodes.bag.types import RECORDED_TOPICS as RECORD_TOPICS
 from sgim_nodes.bag.validation import Limits, LiveGate, teaching_set_size
 from sgim_nodes.core.competence import competence
 from sgim_nodes.core.learners import GOAL_BABBLERS
 from sgim_nodes.core.random_streams import component_rng
+from sgim_nodes.nodes.pace import FOREVER, PaceControl
 from sgim_nodes.nodes.ros_glue import (
     AsyncNode,
     declare_learner,
@@ -79,6 +83,10 @@ class SocialInteraction(AsyncNode):
                   "automatic, human or none"),
             Param("demonstration_period", 150, "the automatic teacher's period P (paper: 150)",
                   lambda v: v >= 1, ">= 1"),
+            Param("wait_for_teacher", 0.0, "human teacher: seconds the run waits for a "
+                  "demonstration every demonstration_period movements (0: never waits, "
+                  f"{FOREVER:g}: until the teacher acts)", lambda v: v >= 0 or v == FOREVER,
+                  f">= 0 or {FOREVER:g}"),
             Param("wait_for_evaluation", True, "finish only after the final evaluation"),
             Param("wait_for_recorder", True, "start only once a recorder listens"),
             Param("startup_timeout", 60.0, "seconds to wait for the other nodes", positive,
@@ -109,10 +117,15 @@ class SocialInteraction(AsyncNode):
         self.turns_taken: set[int] = set()  # teacher boundaries already handled
         self.finished, self.exit_code = False, 0
         self._job = None  # the running action's goal handle, to cancel on a demonstration
+        self._job_name = ""
         self._waiters: list[tuple[callable, Future]] = []
         self._started = time.monotonic()
         self._last_log = 0
 
+        self.pace = None  # pause, step and teacher turns: for a human teacher only
+        if social and values["teacher"] == "human":
+            self.pace = PaceControl(self, self.total, values["demonstration_period"],
+                                    values["wait_for_teacher"], self._preempt_goal)
         self.sim = SimClient(self, values["service_timeout"])
         self.goal_client = self.create_client(ChooseGoal, "choose_goal")
         self.register_client = self.create_client(RegisterDemonstration,
@@ -171,7 +184,14 @@ class SocialInteraction(AsyncNode):
         self.evaluated.add(msg.movement_index)
         self._wake()
 
+    def _preempt_goal(self) -> None:
+        """Cut a goal attempt at its next movement boundary (an imitation is never cut)."""
+        if self._job is not None and self._job_name == "reach_goal":
+            self._job.cancel_goal_async()
+
     def _wake(self) -> None:
+        if self.pace is not None:
+            self.pace.notify()
         for condition, future in self._waiters:
             if not future.done() and condition():
                 future.set_result(True)
@@ -265,6 +285,13 @@ class SocialInteraction(AsyncNode):
 
     async def _run(self) -> None:
         while self.count < self.total:
+            if self.pace is not None:
+                await self.pace.hold(self.count)
+                if self.pace.turn_due(self.count) and self.count not in self.turns_taken:
+                    self.turns_taken.add(self.count)
+                    how = await self.pace.teacher_turn(self.count, lambda: bool(self.pending))
+                    self.get_logger().info(f"teacher's turn at movement {self.count}: {how}")
+                    continue
             boundary = self.sync_period and self.count % self.sync_period == 0
             if boundary and self.count not in self.turns_taken:
                 self.turns_taken.add(self.count)
@@ -277,17 +304,25 @@ class SocialInteraction(AsyncNode):
                 continue
             if self.pending:
                 await self._take_demonstration(self.pending.popleft())
+                self._paced()
                 continue
             cap = self.total - self.count
             if self.sync_period:
                 cap = min(cap, self.sync_period - self.count % self.sync_period)
+            if self.pace is not None:
+                cap = min(cap, self.pace.cap(cap))
             if self.learner in GOAL_BABBLERS:
                 await self._goal_attempt(cap)
             elif self.learner == "demo-only" and self.latest_demo is not None:
                 await self._imitation(self.latest_demo, cap)
             else:
                 await self._random_movement()
+            self._paced()
             self._progress()
+
+    def _paced(self) -> None:
+        if self.pace is not None:
+            self.pace.moved(self.count)
 
     async def _take_demonstration(self, demo: Demonstration) -> None:
         if self.count >= self.total:
@@ -344,10 +379,11 @@ class SocialInteraction(AsyncNode):
         handle = await client.send_goal_async(goal)
         if not handle.accepted:
             raise RunAborted(f"'{name}' refused a job: is another arbiter running?")
-        self._job = handle
+        self._job, self._job_name = handle, name
         try:
-            if self.pending and name == "reach_goal":
-                handle.cancel_goal_async()  # a demonstration came while the job was sent
+            held = self.pending or (self.pace is not None and self.pace.paused)
+            if held and name == "reach_goal":
+                handle.cancel_goal_async()  # a demonstration or a pause came while it was sent
             response = await handle.get_result_async()
         finally:
             self._job = None
