@@ -31,6 +31,7 @@ setup(
             "social_interaction = sgim_nodes.nodes.social_interaction:main",
             "evaluator = sgim_nodes.nodes.evaluator:main",
             "recorder = sgim_nodes.nodes.recorder:main",
+            "markers = sgim_nodes.nodes.markers:main",
             "replay = sgim_nodes.bag.replay:main",
             "rebuild = sgim_nodes.bag.rebuild:main",
             "repair = sgim_nodes.bag.repair:main",

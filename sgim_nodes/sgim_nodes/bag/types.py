@@ -30,7 +30,19 @@ TOPICS: dict[str, str] = {
     "evaluations": f"{PACKAGE}/msg/Evaluation",
     "run_status": f"{PACKAGE}/msg/RunStatus",
 }
-STATE_TOPICS = frozenset({"region_map"})
+# What a run also records for viewers (Foxglove, rviz2): the arbiter's pace and the markers
+# node's live picture (docs/markers.md). They are not learner records: load_run ignores them.
+VIEW_TOPICS: dict[str, str] = {
+    "pace_state": f"{PACKAGE}/msg/PaceState",
+    "markers/landings": "visualization_msgs/msg/MarkerArray",
+    "markers/regions": "visualization_msgs/msg/MarkerArray",
+    "markers/teaching_goals": "visualization_msgs/msg/MarkerArray",
+    "markers/current_goal": "visualization_msgs/msg/MarkerArray",
+}
+RECORDED_TOPICS: dict[str, str] = {**TOPICS, **VIEW_TOPICS}
+# By last name component (names may be namespaced): the topics that hold a state, not records.
+STATE_TOPICS = frozenset({"region_map", "pace_state", "regions", "teaching_goals",
+                          "current_goal"})
 
 
 class MessageDefinitionsNotFound(FileNotFoundError):

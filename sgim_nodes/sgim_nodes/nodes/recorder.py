@@ -23,7 +23,8 @@ Measured (benchmarks/bench_recorder.py): see README, "Reliability".
 
 Interfaces (relative names, see docs/node_graph.md):
   subscribes  every topic of bag.types.TOPICS (RECORDS), region_map (LATEST_STATE durability,
-              keep-all so no map is skipped)
+              keep-all so no map is skipped), and the viewers' topics (bag.types.VIEW_TOPICS:
+              pace_state, markers/*), recorded as they come, without validation
   serves      recorder_ready (sgim_msgs/srv/RecorderReady)
 Parameters: see PARAMS (and `recorder --help`).
 """
@@ -44,7 +45,7 @@ from rclpy.serialization import deserialize_message
 from sgim_msgs.msg import RunStatus
 from sgim_msgs.srv import RecorderReady
 from sgim_nodes.bag.run_folder import QUARANTINE_SUFFIX
-from sgim_nodes.bag.types import STATE_TOPICS, TOPICS
+from sgim_nodes.bag.types import RECORDED_TOPICS, STATE_TOPICS, TOPICS
 from sgim_nodes.bag.validation import LIMITS_KEY, Limits, RunValidator, teaching_set_size
 from sgim_nodes.bag.writer import STORAGES, BagWriteError, BagWriter
 from sgim_ros import qos
@@ -137,7 +138,7 @@ class RecorderNode(Node):
         self._names: dict[str, str] = {}
         self._classes: dict[str, type] = {}
         self._record_subs: dict[str, object] = {}
-        for name, msgtype in TOPICS.items():
+        for name, msgtype in RECORDED_TOPICS.items():
             self._classes[name] = ros_message_class(msgtype)
             sub = self._record_subs[name] = self.create_subscription(
                 self._classes[name], name,
@@ -151,8 +152,8 @@ class RecorderNode(Node):
         self.create_service(RecorderReady, "recorder_ready", self._ready)
         self._write_quarantine()
         self.get_logger().info(
-            f"recording {len(TOPICS)} topics into {self.bag.file} ({p['storage']}, flushed "
-            f"every {p['chunk_seconds']} s or {p['chunk_messages']} messages)")
+            f"recording {len(RECORDED_TOPICS)} topics into {self.bag.file} ({p['storage']}, "
+            f"flushed every {p['chunk_seconds']} s or {p['chunk_messages']} messages)")
 
     def _ready(self, request: RecorderReady.Request, response: RecorderReady.Response):
         """Matched, not merely discovered: only a matched publisher's messages reach the bag."""
@@ -176,7 +177,8 @@ class RecorderNode(Node):
             self._fail(f"could not write a {name} message: {type(error).__name__}: {error}")
             return
         self.counts[name] += 1
-        self._validate(name, raw, now)
+        if name in TOPICS:  # the learner's records; the viewers' topics are only kept
+            self._validate(name, raw, now)
         if self._finish_at is not None:  # trailing messages push the exit back
             self._finish_at = time.monotonic() + self.finish_grace
 

@@ -1,0 +1,72 @@
+"""Feed a LivePicture from the graph's topics: the one subscription list of every viewer.
+
+The web teacher and the markers node both follow a run through the same topics into the same
+picture (view/picture.py). ``lock``: held while a message changes the picture, for a viewer
+that reads it from another thread (the web server's).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+
+from rclpy.node import Node
+
+from sgim_msgs.msg import (
+    Demonstration,
+    Evaluation,
+    Goal,
+    Movement,
+    RegionMap,
+    RunStatus,
+)
+from sgim_nodes.view.picture import DemonstrationSeen, Leaf, LivePicture
+from sgim_ros import qos
+
+RUN_STATES = {RunStatus.STATE_RUNNING: "running", RunStatus.STATE_FINISHED: "finished",
+              RunStatus.STATE_ABORTED: "aborted"}
+
+
+def follow(node: Node, picture: LivePicture, lock: threading.Lock | None = None) -> None:
+    """Subscribe ``node`` to every topic the picture shows."""
+    guard = lock if lock is not None else contextlib.nullcontext()
+
+    def on_movement(msg: Movement) -> None:
+        if msg.process == Movement.PROCESS_EVALUATION:
+            return
+        with guard:
+            picture.add_movement(msg.index, msg.process, msg.status == Movement.STATUS_OK,
+                                 msg.outcome, msg.goal)
+
+    def on_regions(msg: RegionMap) -> None:
+        leaves = [Leaf((r.lower[0], r.lower[1]), (r.upper[0], r.upper[1]), float(r.interest))
+                  for r in msg.regions if r.is_leaf and len(r.lower) == 2 == len(r.upper)]
+        with guard:
+            picture.set_regions(leaves)
+
+    def on_goal(msg: Goal) -> None:
+        if len(msg.point) == 2:
+            with guard:
+                picture.set_goal(msg.point)
+
+    def on_evaluation(msg: Evaluation) -> None:
+        with guard:
+            picture.add_evaluation(msg.movement_index, msg.mean_distance)
+
+    def on_demonstration(msg: Demonstration) -> None:
+        with guard:
+            picture.add_demonstration(DemonstrationSeen(
+                int(msg.index), int(msg.movement_index), tuple(float(v) for v in msg.outcome),
+                int(msg.teaching_set_index), str(msg.source)))
+
+    def on_status(msg: RunStatus) -> None:
+        with guard:
+            picture.set_status(msg.learner, msg.movement_index, msg.total_movements,
+                               RUN_STATES.get(msg.state, "running"), msg.message)
+
+    node.create_subscription(Movement, "movements", on_movement, qos.RECORDS)
+    node.create_subscription(RegionMap, "region_map", on_regions, qos.LATEST_STATE)
+    node.create_subscription(Goal, "goals", on_goal, qos.RECORDS)
+    node.create_subscription(Evaluation, "evaluations", on_evaluation, qos.RECORDS)
+    node.create_subscription(Demonstration, "demonstrations", on_demonstration, qos.RECORDS)
+    node.create_subscription(RunStatus, "run_status", on_status, qos.RECORDS)
