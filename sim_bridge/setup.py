@@ -29,6 +29,7 @@ setup(
             "map_reachable = sim_bridge.tools.map_reachable:main",
             "make_benchmark_set = sim_bridge.tools.make_benchmark_set:main",
             "make_teaching_set = sim_bridge.tools.make_teaching_set:main",
+            "render_cast = sim_bridge.tools.render_cast:main",
         ],
     },
 )
