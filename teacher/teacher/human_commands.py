@@ -14,7 +14,12 @@ Commands (``help`` prints this list):
                 once through the simulator's execute_action service with record=false (not a
                 learner movement), so a person never has to guess it; an ``outcome: [x, y]``
                 in the file is only a fallback for when that service is not available
+  pause, resume, step [N]   pace the run through the arbiter's ``pace`` service; ``resume``
+                at a teacher turn goes on without a demonstration
   help, quit
+
+A demonstration the learner cannot take any more (its movement budget is spent, the run is
+over) is refused here with the reason, never sent to be silently dropped.
 
 Why ``goal`` sends a stored pair and not the inverse model's interpolated action: a
 demonstration must carry the outcome its action produces, and only stored pairs have a known
@@ -51,6 +56,9 @@ HELP = """commands:
   yaml FILE     send the action in FILE (a list of 24 numbers in [-1, 1], or `action: [...]`);
                 its outcome is measured by executing it once through execute_action (not
                 recorded); a file's `outcome: [x, y]` is used only if that service is absent
+  pause         pause the run before its next movement
+  resume        go on (at your turn: go on without a demonstration)
+  step [N]      make N movements (default 1), then pause again
   help          this list
   quit          leave (end of input and Ctrl-C also leave)"""
 
@@ -97,10 +105,19 @@ class YamlFile:
     path: str
 
 
-Command = Help | Quit | ListGoals | Status | Teach | GoalPoint | YamlFile
+@dataclass(frozen=True)
+class PaceRequest:
+    """pause, resume or step: for the arbiter's pace service."""
+
+    what: str  # "pause", "resume" or "step"
+    steps: int = 0
+
+
+Command = Help | Quit | ListGoals | Status | Teach | GoalPoint | YamlFile | PaceRequest
 
 _NO_ARGUMENT = {"help": Help, "?": Help, "quit": Quit, "exit": Quit, "list": ListGoals,
                 "status": Status}
+PACE_WORDS = ("pause", "resume", "step")
 
 
 def parse(line: str) -> Command | None:
@@ -126,12 +143,41 @@ def parse(line: str) -> Command | None:
             raise CommandError(f"'goal' needs {OUTCOME_SIZE} numbers X Y in [-1, 1] "
                                f"(e.g. goal 0.1 -0.2), got {len(args)} values")
         return GoalPoint(tuple(parse_unit(a, f"goal {'XY'[i]}") for i, a in enumerate(args)))
+    if name in PACE_WORDS:
+        return parse_pace(name, args)
     if name == "yaml":
         if len(args) != 1:
             raise CommandError(f"'yaml' needs one file name (quote it if it has spaces), "
                                f"got {len(args)} values")
         return YamlFile(args[0])
     raise CommandError(f"unknown command '{words[0]}': type 'help' for the list")
+
+
+def parse_pace(name: str, args: list[str]) -> PaceRequest:
+    if name != "step":
+        if args:
+            raise CommandError(f"'{name}' takes no arguments, got {len(args)}")
+        return PaceRequest(name)
+    if len(args) > 1:
+        raise CommandError(f"'step' takes at most one number of movements, got {len(args)}")
+    steps = parse_index(args[0]) if args else 1
+    if not 1 <= steps <= 100_000:
+        raise CommandError(f"'step' needs a number of movements from 1 to 100000, got {steps}")
+    return PaceRequest("step", steps)
+
+
+def parse_numbers(text: str, size: int, what: str = "the pasted action") -> np.ndarray:
+    """``size`` numbers in [-1, 1] from pasted text: separated by spaces, commas or new
+    lines, optionally in brackets (a Python, JSON or YAML list)."""
+    cleaned = text.strip()
+    if cleaned.startswith("[") and cleaned.endswith("]"):
+        cleaned = cleaned[1:-1]
+    words = [w for w in cleaned.replace(",", " ").split() if w]
+    if not words:
+        raise CommandError(f"{what} is empty: {size} numbers in [-1, 1] are needed")
+    if len(words) != size:
+        raise CommandError(f"{what} has {len(words)} numbers, {size} are needed")
+    return np.array([parse_unit(w, f"{what}[{i}]") for i, w in enumerate(words)])
 
 
 def parse_index(text: str) -> int:
@@ -171,6 +217,8 @@ class LearnerState:
     evaluation: tuple[int, float] | None = None  # (movement index, mean distance)
     demonstrations: int = 0  # given by this node
     listeners: int = 0  # subscribers of the demonstrations topic, as last seen
+    total: int = 0  # the run's movement budget (0: not heard yet)
+    run_over: str = ""  # why the run is over ("finished", "aborted: ..."); "" while it runs
     actions: list[np.ndarray] = field(default_factory=list)  # of landed movements
     outcomes: list[np.ndarray] = field(default_factory=list)
     indices: list[int] = field(default_factory=list)  # their Movement.index
@@ -193,6 +241,15 @@ class LearnerState:
 
     def reached(self) -> np.ndarray:
         return np.array(self.outcomes).reshape(-1, OUTCOME_SIZE)
+
+    def refusal(self) -> str:
+        """Why the learner can take no demonstration now, or ''."""
+        if self.run_over:
+            return f"the run is over ({self.run_over}): the learner takes no more demonstrations"
+        if self.total and self.movement_count >= self.total:
+            return (f"the movement budget is spent ({self.movement_count}/{self.total}): "
+                    "the learner takes no more demonstrations")
+        return ""
 
 
 # --- decisions -------------------------------------------------------------------------------
@@ -222,7 +279,7 @@ class ExecuteFirst:
     path: str
 
 
-Decision = Reply | SendDemonstration | ExecuteFirst | Quit
+Decision = Reply | SendDemonstration | ExecuteFirst | Quit | PaceRequest
 
 
 class TeachingLibrary:
@@ -259,11 +316,16 @@ class TeachingLibrary:
                 return Reply(self.list_text(state))
             case Status():
                 return Reply(status_text(state))
+            case PaceRequest():
+                return command
             case Teach(index):
+                refuse_if_over(state)
                 return self.teach(index, state)
             case GoalPoint(point):
+                refuse_if_over(state)
                 return self.for_goal(np.array(point), state)
             case YamlFile(path):
+                refuse_if_over(state)
                 action, outcome = load_action_file(path, self.action_size)
                 return ExecuteFirst(action, outcome, path)
         raise CommandError(f"no handler for {command!r}")  # unreachable: parse makes commands
@@ -322,19 +384,28 @@ class TeachingLibrary:
             f"({distance:.3f} from the goal, reliability {estimate.reliability:.3f})")
 
 
+def refuse_if_over(state: LearnerState) -> None:
+    why = state.refusal()
+    if why:
+        raise CommandError(why)
+
+
 def status_text(state: LearnerState) -> str:
     if state.evaluation is None:
         error = "no evaluation yet"
     else:
         error = f"{state.evaluation[1]:.4f} (at movement {state.evaluation[0]})"
-    return (f"latest evaluation error: {error}\nmovements: {state.movement_count}\n"
+    budget = f"/{state.total}" if state.total else ""
+    over = f" (run over: {state.run_over})" if state.run_over else ""
+    return (f"latest evaluation error: {error}\nmovements: {state.movement_count}{budget}{over}\n"
             f"demonstrations given: {state.demonstrations}\n"
             f"listening to demonstrations: {state.listeners}")
 
 
 def prompt(state: LearnerState) -> str:
     error = "-" if state.evaluation is None else f"{state.evaluation[1]:.3f}"
-    return (f"[movements {state.movement_count} | error {error} | "
+    budget = f"/{state.total}" if state.total else ""
+    return (f"[movements {state.movement_count}{budget} | error {error} | "
             f"demos {state.demonstrations}] human> ")
 
 

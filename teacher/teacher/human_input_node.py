@@ -1,29 +1,40 @@
 """ROS 2 node `human_input`: a person at a terminal takes the automatic teacher's place.
 
 The command language and every decision live in ``human_commands`` (no ROS); this node feeds
-it what the graph says and sends what it decides. One thread does everything: a ``spin_once``
-loop that also polls stdin with ``select``. Why not a reader thread: a daemon thread blocked
-in a read of stdin can abort the interpreter at exit, and a second thread touching the node
-state would need locks; why not EventsExecutor in the background: it hung in tests here.
-Reading the raw file descriptor works the same for a terminal and a pipe (tests), and the
-loop ends cleanly at ``quit``, end of input, Ctrl-C or a ROS shutdown.
+it what the graph says and sends what it decides.
+
+Two threads, each with one job: the main thread reads lines with ``input()`` (with readline's
+line editing and history when stdin is a terminal; history in ~/.sgim_teacher_history), and
+a second thread spins the node (``spin_once`` in a loop; EventsExecutor hung in tests here).
+One lock keeps them from touching the node's state at once. What the graph says while the
+person types (the teacher's turn, a pause, a refused demonstration, progress every 10 %, the
+end of the run) is printed above the prompt, which is redrawn with what was being typed. When
+the run is over the prompt says so and leaves by itself: the reading thread is woken with
+SIGINT (rclpy's own signal handlers are not installed, so Ctrl-C is a plain
+KeyboardInterrupt). A pipe works the same way as a terminal (tests), without readline.
 
 Interfaces:
   topic    movements       (sgim_msgs/msg/Movement, RECORDS): reached outcomes, movement count
   topic    evaluations     (sgim_msgs/msg/Evaluation, RECORDS): latest evaluation error
+  topic    run_status      (sgim_msgs/msg/RunStatus, RECORDS): budget, the end of the run
+  topic    pace_state      (sgim_msgs/msg/PaceState, LATEST_STATE): pause, the teacher's turn
   topic    demonstrations  (sgim_msgs/msg/Demonstration, RECORDS): published, source "human"
   client   execute_action  (sgim_msgs/srv/ExecuteAction): measures a YAML file's action, with
                            record=false so the learner's history is untouched
+  client   pace            (sgim_msgs/srv/Pace): pause, resume, step
 Parameters: tolerance, teaching_set, execute_timeout (see PARAMS).
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
-import select
+import signal
 import sys
+import threading
 import time
 import zipfile
+from pathlib import Path
 from typing import TextIO
 
 import numpy as np
@@ -31,10 +42,11 @@ import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
 
-from sgim_msgs.msg import Demonstration, Evaluation, Movement
-from sgim_msgs.srv import ExecuteAction
+from sgim_msgs.msg import Demonstration, Evaluation, Movement, PaceState, RunStatus
+from sgim_msgs.srv import ExecuteAction, Pace
 from sgim_nodes.bag.validation import Limits, LiveGate
 from sgim_ros import qos
 from sgim_ros.params import Param, ParameterError, declare, non_negative, positive
@@ -45,6 +57,7 @@ from teacher.human_commands import (
     CommandError,
     ExecuteFirst,
     LearnerState,
+    PaceRequest,
     Quit,
     Reply,
     SendDemonstration,
@@ -65,33 +78,14 @@ PARAMS = (
           "seconds to wait for execute_action to measure the outcome of a YAML action",
           positive, "> 0"),
 )
-
-
-class StdinLines:
-    """Complete lines typed so far, read without blocking from a file descriptor."""
-
-    def __init__(self, fd: int) -> None:
-        self.fd = fd
-        self.buffer = b""
-        self.eof = False
-
-    def poll(self) -> list[str]:
-        lines: list[str] = []
-        while not self.eof and select.select([self.fd], [], [], 0)[0]:
-            chunk = os.read(self.fd, 4096)
-            if not chunk:
-                self.eof = True
-                break
-            self.buffer += chunk
-        *complete, self.buffer = self.buffer.split(b"\n")
-        if self.eof and self.buffer:  # a last line without newline
-            complete, self.buffer = [*complete, self.buffer], b""
-        lines += [c.decode(errors="replace") for c in complete]
-        return lines
+PACE_COMMANDS = {"pause": Pace.Request.PAUSE, "resume": Pace.Request.RESUME,
+                 "step": Pace.Request.STEP}
+HISTORY = Path(os.environ.get("SGIM_TEACHER_HISTORY", "~/.sgim_teacher_history")).expanduser()
 
 
 class HumanInputNode(Node):
-    def __init__(self, out: TextIO = sys.stdout, echo: bool = False) -> None:
+    def __init__(self, out: TextIO = sys.stdout, echo: bool = False,
+                 interactive: bool = False) -> None:
         super().__init__("human_input")
         p = declare(self, PARAMS)
         where = p["teaching_set"] or "the packaged teaching set"
@@ -103,24 +97,44 @@ class HumanInputNode(Node):
                 from None
         self.execute_timeout = p["execute_timeout"]
         self.state = LearnerState(self.library.action_size)
-        self.out, self.echo = out, echo
+        self.out, self.echo, self.interactive = out, echo, interactive
+        self.lock = threading.RLock()  # the reading thread and the spinning thread
         self.finished = False
+        self.at_prompt = False  # the prompt is on screen, waiting for a line
         self._pending: tuple[ExecuteFirst, Future, float] | None = None  # request, future, end
+        self._pace_call: Future | None = None
+        self._decile = 0  # progress printed every 10 % of the budget
+        self._waiting_turn = False
         # A rogue movement must not move the count the teacher's demonstrations carry; the
         # first valid movement sets it (a resumed run does not start at 1).
         self.gate = LiveGate(self.get_logger().warning,
                              Limits(self.library.action_size, OUTCOME_SIZE))
         self.gate.movements.resync()
         self._demos = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
-        self.create_subscription(Movement, "movements", self._on_movement, qos.RECORDS)
-        self.create_subscription(Evaluation, "evaluations", self._on_evaluation, qos.RECORDS)
+        self.create_subscription(Movement, "movements", self._locked(self._on_movement),
+                                 qos.RECORDS)
+        self.create_subscription(Evaluation, "evaluations", self._locked(self._on_evaluation),
+                                 qos.RECORDS)
+        self.create_subscription(RunStatus, "run_status", self._locked(self._on_status),
+                                 qos.RECORDS)
+        self.create_subscription(PaceState, "pace_state", self._locked(self._on_pace),
+                                 qos.LATEST_STATE)
         self._execute = self.create_client(ExecuteAction, "execute_action")
+        self._pace = self.create_client(Pace, "pace")
         self.say(f"human teacher: {len(self.library.actions)} teaching-set entries from "
                  f"{where}, reach tolerance {p['tolerance']:g}; type 'help' for the commands")
+
+    def _locked(self, callback):
+        def locked(msg) -> None:
+            with self.lock:
+                callback(msg)
+        return locked
 
     # --- what the graph says -----------------------------------------------------------
 
     def _on_movement(self, msg: Movement) -> None:
+        if msg.process == Movement.PROCESS_EVALUATION:
+            return
         if not self.gate.admit_movement(msg).ok:  # the readers' checks (bag/validation.py)
             return
         landed = msg.status == Movement.STATUS_OK
@@ -135,18 +149,64 @@ class HumanInputNode(Node):
         if latest is None or msg.movement_index >= latest[0]:
             self.state.evaluation = (int(msg.movement_index), float(msg.mean_distance))
 
+    def _on_status(self, msg: RunStatus) -> None:
+        state = self.state
+        state.total = int(msg.total_movements)
+        state.movement_count = max(state.movement_count, int(msg.movement_index))
+        if msg.state == RunStatus.STATE_FINISHED:
+            state.run_over = "finished"
+        elif msg.state == RunStatus.STATE_ABORTED:
+            state.run_over = f"aborted: {msg.message}"
+        if state.run_over:
+            error = "" if state.evaluation is None else (
+                f", final error {state.evaluation[1]:.4f}")
+            self.notify(f"the run is over ({state.run_over}) at movement "
+                        f"{state.movement_count}{error}: bye")
+            self.finished = True
+            return
+        if "not taken" in msg.message:
+            self.notify(f"warning: {msg.message}")
+        decile = 10 * state.movement_count // max(1, state.total)
+        if decile > self._decile:
+            self._decile = decile
+            self.notify(f"progress: movement {state.movement_count}/{state.total} "
+                        f"({10 * decile} %)")
+
+    def _on_pace(self, msg: PaceState) -> None:
+        if msg.waiting_for_teacher and not self._waiting_turn:
+            limit = ("no time limit" if msg.wait_seconds < 0
+                     else f"{msg.wait_seconds_left:.0f} s")
+            self.notify(f"your turn at movement {msg.movement_index} ({limit}): teach N, "
+                        "goal X Y or yaml FILE to demonstrate, resume to go on")
+        self._waiting_turn = msg.waiting_for_teacher
+        if msg.message.startswith("step done"):
+            self.notify(msg.message)
+
     # --- the terminal ----------------------------------------------------------------------
 
     @property
     def busy(self) -> bool:
-        return self._pending is not None
+        return self._pending is not None or self._pace_call is not None
 
     def say(self, text: str, end: str = "\n") -> None:
         self.out.write(text + end)
         self.out.flush()
 
-    def show_prompt(self) -> None:
-        self.say(prompt(self.state), end="")
+    def notify(self, text: str) -> None:
+        """A line from the graph, printed above the prompt (redrawn with the typed text)."""
+        if not self.at_prompt:
+            self.say(text)
+            return
+        if self.interactive:
+            import readline
+
+            typed = readline.get_line_buffer()
+            self.say(f"\r\x1b[K{text}\n{prompt(self.state)}{typed}", end="")
+        else:
+            self.say(f"\n{text}")
+
+    def prompt_text(self) -> str:
+        return prompt(self.state)
 
     def handle_line(self, line: str) -> None:
         """Obey one typed line; every mistake is printed, none escapes."""
@@ -158,8 +218,6 @@ class HumanInputNode(Node):
                 self._obey(command)
         except CommandError as error:
             self.say(f"error: {error}")
-        if not self.busy and not self.finished:
-            self.show_prompt()
 
     def end_of_input(self) -> None:
         self.say("\nend of input: bye")
@@ -177,8 +235,13 @@ class HumanInputNode(Node):
             self._send(decision)
         elif isinstance(decision, ExecuteFirst):
             self._start_execution(decision)
+        elif isinstance(decision, PaceRequest):
+            self._start_pace(decision)
 
     def _send(self, demo: SendDemonstration) -> None:
+        why = self.state.refusal()
+        if why:
+            raise CommandError(why)
         self.state.listeners = self._demos.get_subscription_count()
         if self.state.listeners == 0:
             raise CommandError("nobody subscribes to 'demonstrations' (is the learner "
@@ -196,6 +259,14 @@ class HumanInputNode(Node):
         self.say(f"sent demonstration {self.state.demonstrations} at movement "
                  f"{self.state.movement_count}: {demo.text}")
 
+    def _start_pace(self, request: PaceRequest) -> None:
+        if not self._pace.service_is_ready():
+            raise CommandError("the run has no pace service (is the learner running, with "
+                               "teacher: human?)")
+        self._pace_call = self._pace.call_async(Pace.Request(
+            command=PACE_COMMANDS[request.what], steps=request.steps))
+        self._pace_deadline = time.monotonic() + 10.0
+
     def _start_execution(self, request: ExecuteFirst) -> None:
         if not self._execute.service_is_ready():
             self._send(unexecuted_demonstration(request, "execute_action is not available"))
@@ -210,7 +281,25 @@ class HumanInputNode(Node):
         self._pending = (request, future, time.monotonic() + self.execute_timeout)
 
     def poll(self) -> None:
-        """Finish a pending execution once it answered or timed out."""
+        """Finish a pending call once it answered or timed out (spinning thread)."""
+        with self.lock:
+            self._poll_pace()
+            self._poll_execution()
+
+    def _poll_pace(self) -> None:
+        future = self._pace_call
+        if future is None or (not future.done() and time.monotonic() < self._pace_deadline):
+            return
+        self._pace_call = None
+        if not future.done():
+            future.cancel()
+            self._pace.remove_pending_request(future)
+            self.say("error: the pace service did not answer within 10 s")
+            return
+        reply = future.result()
+        self.say(reply.message if reply.accepted else f"error: {reply.message}")
+
+    def _poll_execution(self) -> None:
         if self._pending is None:
             return
         request, future, deadline = self._pending
@@ -230,44 +319,105 @@ class HumanInputNode(Node):
                                                   r.message))
         except CommandError as error:
             self.say(f"error: {error}")
-        if not self.finished:
-            self.show_prompt()
 
 
-def run(node: HumanInputNode, fd: int) -> None:
-    """One thread: ROS callbacks, the pending service call and typed lines, in turn."""
-    executor = SingleThreadedExecutor(context=node.context)
-    executor.add_node(node)
-    lines = StdinLines(fd)
-    queued: list[str] = []
-    node.show_prompt()
+class Spinner(threading.Thread):
+    """Spins the node until stopped; wakes the reading thread when the node is finished."""
+
+    def __init__(self, node: HumanInputNode) -> None:
+        super().__init__(name="human-input-ros", daemon=False)
+        self.node = node
+        self.stopping = threading.Event()
+        self.executor = SingleThreadedExecutor(context=node.context)
+        self.executor.add_node(node)
+
+    def run(self) -> None:
+        try:
+            while not self.stopping.is_set() and self.node.context.ok():
+                self.executor.spin_once(timeout_sec=0.05)
+                self.node.poll()
+                if self.node.finished and not self.stopping.is_set():
+                    self.stopping.set()
+                    os.kill(os.getpid(), signal.SIGINT)  # leave input() in the main thread
+        except ExternalShutdownException:
+            pass
+        finally:
+            with contextlib.suppress(Exception):
+                self.executor.remove_node(self.node)
+            self.executor.shutdown()
+
+    def stop(self) -> None:
+        self.stopping.set()
+        self.join(timeout=5)
+
+
+def setup_readline() -> None:
+    """Line editing and a history kept across sessions, for a person at a terminal."""
+    import atexit
+    import readline
+
+    with contextlib.suppress(OSError):
+        readline.read_history_file(HISTORY)
+    readline.set_history_length(1000)
+    atexit.register(lambda: _save_history(readline))
+
+
+def _save_history(readline) -> None:
+    with contextlib.suppress(OSError):
+        readline.write_history_file(HISTORY)
+
+
+def run(node: HumanInputNode) -> str:
+    """Read and obey lines until quit, end of input or the run's end; returns why it ended."""
+    spinner = Spinner(node)
+    spinner.start()
     try:
-        while not node.finished and node.context.ok():
-            executor.spin_once(timeout_sec=0.05)
-            node.poll()
-            queued += lines.poll()
-            while queued and not node.busy and not node.finished:
-                node.handle_line(queued.pop(0))
-            if lines.eof and not queued and not node.busy and not node.finished:
+        while not node.finished:
+            with node.lock:
+                text = node.prompt_text()
+                node.at_prompt = True
+            try:
+                line = input(text)
+            except EOFError:
+                node.at_prompt = False
                 node.end_of_input()
+                return "end of input"
+            node.at_prompt = False
+            with node.lock:
+                node.handle_line(line)
+            while node.busy and not node.finished:
+                time.sleep(0.02)
+        return "finished"
+    except KeyboardInterrupt:
+        node.at_prompt = False
+        if node.finished:  # woken by the spinner: the run is over, already said
+            print(file=node.out)
+            return "run over"
+        raise
     finally:
-        executor.remove_node(node)
-        executor.shutdown()
+        spinner.stop()
+
+
+def _interrupt(*_: object) -> None:
+    raise KeyboardInterrupt
 
 
 def main(args: list[str] | None = None) -> int:
-    rclpy.init(args=args)
+    # Our own Ctrl-C: a KeyboardInterrupt in the reading thread, not rclpy's shutdown.
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    signal.signal(signal.SIGTERM, _interrupt)  # the launcher's stop: the same clean goodbye
+    interactive = sys.stdin.isatty()
     try:
-        node = HumanInputNode(echo=not sys.stdin.isatty())
+        node = HumanInputNode(echo=not interactive, interactive=interactive)
     except (ParameterError, ParameterException) as error:
         print(f"human_input: {error}", file=sys.stderr)
         rclpy.try_shutdown()
         return 2
+    if interactive:
+        setup_readline()
     try:
-        run(node, sys.stdin.fileno())
-        if not node.finished:
-            node.say("\nROS shut down: bye")
-    except (KeyboardInterrupt, ExternalShutdownException):
+        run(node)
+    except KeyboardInterrupt:
         node.say("\ninterrupted: bye")
     finally:
         node.destroy_node()
