@@ -10,6 +10,8 @@ setup(
     name=PACKAGE,
     version="0.1.0",
     packages=find_packages(exclude=["test", "tests"]),
+    # The web teacher's page (teacher/web/static) is served from beside its module.
+    package_data={"teacher.web": ["static/*"]},
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
@@ -19,12 +21,13 @@ setup(
     zip_safe=False,
     maintainer="SGIM-ROS maintainers",
     maintainer_email="maintainers@sgim-ros.org",
-    description="Automatic and human teachers for SGIM-D.",
+    description="Automatic and human teachers for SGIM-D: terminal prompt and web page.",
     license="Apache-2.0",
     entry_points={
         "console_scripts": [
             "teacher = teacher.teacher_node:main",
             "human_input = teacher.human_input_node:main",
+            "web_teacher = teacher.web_teacher_node:main",
         ],
     },
 )

@@ -1,0 +1,354 @@
+"""ROS 2 node `web_teacher`: a person teaches a run from a live page in a browser.
+
+It takes the automatic teacher's place (`run_experiment.sh sgim-d --teacher web`) and serves,
+on 127.0.0.1 by default, a page that draws the run as it goes (landings coloured by process,
+the interest tree's leaves coloured by interest, the teaching goals reached or not, the
+current goal, the error curve, the count and the budget) and lets the person demonstrate a
+teaching goal, accept the library's most reliable action for any point, paste 24 numbers,
+and pause, resume or step the run. The decisions are the terminal teacher's
+(human_commands), the picture the markers node's (sgim_nodes.view.picture).
+
+Threads: the HTTP server answers in its own threads, reading the picture under one lock;
+whatever touches ROS (publishing, service calls) is queued to the main thread, which spins
+the node (a 50 Hz timer takes the queue) and answers each queued command when it is done.
+The cast of the latest demonstration is drawn by `render_cast` in a low-priority child
+process, so the run is not slowed.
+
+Interfaces:
+  topics    movements, region_map, goals, evaluations, demonstrations, run_status,
+            pace_state (subscribed); demonstrations (published, source "web")
+  clients   execute_action (measures a pasted action, record=false), pace (the arbiter's)
+Parameters: host, port, token, address_file, tolerance, teaching_set, execute_timeout,
+render_casts (see PARAMS).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import os
+import queue
+import subprocess
+import sys
+import tempfile
+import time
+import zipfile
+from concurrent.futures import Future as ThreadFuture
+from concurrent.futures import TimeoutError as ThreadTimeout
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from rclpy.node import Node
+from rclpy.task import Future
+
+from sgim_msgs.msg import Demonstration, Movement, PaceState, RunStatus
+from sgim_msgs.srv import ExecuteAction, Pace
+from sgim_nodes.nodes.picture_feed import follow
+from sgim_nodes.view.picture import LivePicture
+from sgim_ros import qos
+from sgim_ros.entry import run_node
+from sgim_ros.params import Param, ParameterError, declare, non_negative, positive
+from sim_bridge import scaling
+from sim_bridge.data_files import load_teaching_set
+from sim_bridge.lake import is_water
+from teacher.human_commands import (
+    DEFAULT_TOLERANCE,
+    CommandError,
+    ExecuteFirst,
+    LearnerState,
+    PaceRequest,
+    SendDemonstration,
+    TeachingLibrary,
+    executed_demonstration,
+)
+from teacher.web.app import WebTeacher
+from teacher.web.server import Api, Refused, serve
+
+PARAMS = (
+    Param("host", "127.0.0.1", "interface to serve the page on; another than this machine's "
+          "needs a token"),
+    Param("port", 8765, "TCP port of the page (0: any free port, see address_file)",
+          lambda v: 0 <= v <= 65535, "0 to 65535"),
+    Param("token", "", "access token the page's address must carry (?token=); needed on an "
+          "interface other than loopback (16 characters at least)"),
+    Param("address_file", "", "file to write the page's address into once it serves (for "
+          "launchers and tests); empty: none"),
+    Param("tolerance", DEFAULT_TOLERANCE, "distance under which a teaching goal counts as "
+          "reached (the automatic teacher's)", non_negative, ">= 0"),
+    Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one"),
+    Param("execute_timeout", 30.0, "seconds to wait for execute_action to measure a pasted "
+          "action", positive, "> 0"),
+    Param("render_casts", True, "draw the latest demonstration's cast as a GIF for the page "
+          "(a low-priority child process)"),
+)
+PACE_COMMANDS = {"pause": Pace.Request.PAUSE, "resume": Pace.Request.RESUME,
+                 "step": Pace.Request.STEP}
+COMMAND_WAIT = 10.0  # seconds the page waits for a command that needs no simulator
+
+
+class WebTeacherNode(Node, Api):
+    def __init__(self) -> None:
+        super().__init__("web_teacher")
+        p = declare(self, PARAMS)
+        where = p["teaching_set"] or "the packaged teaching set"
+        try:
+            teaching = load_teaching_set(p["teaching_set"] or None)
+            library = TeachingLibrary(teaching.actions, teaching.outcomes, p["tolerance"])
+        except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as error:
+            raise ParameterError(f"parameter 'teaching_set': cannot use {where}: {error}") \
+                from None
+        self.execute_timeout = p["execute_timeout"]
+        self.app = WebTeacher(library, LivePicture(library.teacher),
+                              LearnerState(library.action_size))
+        self._queue: queue.Queue[tuple[Any, ThreadFuture]] = queue.Queue()
+        self._pending: list[tuple[Future, float, Any, ThreadFuture]] = []
+        self._demos = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
+        follow(self, self.app.picture, self.app.lock)
+        self.create_subscription(Movement, "movements", self._on_movement, qos.RECORDS)
+        self.create_subscription(RunStatus, "run_status", self._on_status, qos.RECORDS)
+        self.create_subscription(PaceState, "pace_state", self._on_pace, qos.LATEST_STATE)
+        self._execute = self.create_client(ExecuteAction, "execute_action")
+        self._pace = self.create_client(Pace, "pace")
+        self._lake = lake_png()
+        self._render_casts = p["render_casts"]
+        self._cast_dir = Path(tempfile.mkdtemp(prefix="web_teacher_cast_"))
+        self._cast_bytes: bytes | None = None
+        self._render: tuple[subprocess.Popen, Path, str] | None = None
+        self._render_next: tuple[np.ndarray, str] | None = None
+        try:
+            self.server = serve(p["host"], p["port"], p["token"], self)
+        except Refused as error:
+            raise ParameterError(str(error)) from None
+        self.url = self.server.url
+        self.create_timer(0.02, self.work)  # queued commands, pending calls, the cast
+        if p["address_file"]:
+            Path(p["address_file"]).write_text(self.url + "\n")
+        self.get_logger().info(f"teach at {self.url}")
+        self.app.say(f"{len(library.actions)} teaching goals from {where}; reach tolerance "
+                     f"{p['tolerance']:g}")
+
+    # --- what the graph says -------------------------------------------------------------
+
+    def _on_movement(self, msg: Movement) -> None:
+        if msg.process == Movement.PROCESS_EVALUATION:
+            return
+        with self.app.lock:
+            problem = self.app.learner.add_movement(
+                msg.index, msg.status == Movement.STATUS_OK, msg.action, msg.outcome)
+        if problem:
+            self.get_logger().warning(problem)
+
+    def _on_status(self, msg: RunStatus) -> None:
+        with self.app.lock:
+            learner = self.app.learner
+            learner.total = int(msg.total_movements)
+            if msg.state == RunStatus.STATE_FINISHED:
+                learner.run_over = "finished"
+            elif msg.state == RunStatus.STATE_ABORTED:
+                learner.run_over = f"aborted: {msg.message}"
+        if msg.message and msg.message not in ("started", ""):
+            level = "warning" if "not taken" in msg.message or msg.state == 2 else "info"
+            self.app.say(f"run: {msg.message}", level)
+
+    def _on_pace(self, msg: PaceState) -> None:
+        with self.app.lock:
+            pace = self.app.pace
+            was_waiting = pace.waiting
+            pace.known, pace.paused, pace.waiting = True, msg.paused, msg.waiting_for_teacher
+            pace.steps_left, pace.wait_seconds = msg.steps_left, msg.wait_seconds
+            pace.period = msg.teacher_period
+            pace.turn_ends = (time.monotonic() + msg.wait_seconds_left
+                              if msg.waiting_for_teacher and msg.wait_seconds_left >= 0
+                              else math.inf)
+        if msg.waiting_for_teacher and not was_waiting:
+            self.app.say(f"your turn at movement {msg.movement_index}: demonstrate, or "
+                         "resume to go on", "turn")
+        elif msg.message and not msg.waiting_for_teacher:
+            self.app.say(f"pace: {msg.message}")
+
+    # --- the server's questions (HTTP threads) --------------------------------------------
+
+    def state(self, query: dict[str, int]) -> dict[str, Any]:
+        with self.app.lock:
+            self.app.learner.listeners = self._demos.get_subscription_count()
+        return self.app.state(**query)
+
+    def legend(self) -> dict[str, Any]:
+        return self.app.legend()
+
+    def image(self, name: str) -> bytes | None:
+        return self._lake if name == "lake.png" else self._cast_bytes
+
+    def command(self, body: Any) -> dict[str, Any]:
+        try:
+            decision = self.app.decide(body)
+        except CommandError as error:
+            self.app.say(f"refused: {error}", "error")
+            return {"ok": False, "message": str(error)}
+        if isinstance(decision, dict):
+            self.app.say(decision["message"])
+            return decision
+        done: ThreadFuture = ThreadFuture()
+        self._queue.put((decision, done))
+        wait = COMMAND_WAIT + (self.execute_timeout if isinstance(decision, ExecuteFirst)
+                               else 0.0)
+        try:
+            return done.result(timeout=wait)
+        except ThreadTimeout:
+            return {"ok": False, "message": f"no answer within {wait:g} s: is the node busy?"}
+
+    # --- the main thread: commands that touch ROS -------------------------------------------
+
+    def work(self) -> None:
+        """Obey queued commands and finish pending calls; called between spin_once calls."""
+        while True:
+            try:
+                decision, done = self._queue.get_nowait()
+            except queue.Empty:
+                break
+            self._start(decision, done)
+        for item in list(self._pending):
+            future, deadline, decision, done = item
+            if future.done() or time.monotonic() > deadline:
+                self._pending.remove(item)
+                self._finish(future, decision, done)
+        self._poll_render()
+
+    def _start(self, decision: Any, done: ThreadFuture) -> None:
+        try:
+            if isinstance(decision, SendDemonstration):
+                done.set_result(self._send(decision))
+            elif isinstance(decision, ExecuteFirst):
+                if not self._execute.service_is_ready():
+                    raise CommandError("the simulator's execute_action service is not "
+                                       "available to measure the action's outcome")
+                future = self._execute.call_async(ExecuteAction.Request(
+                    action=[float(v) for v in decision.action],
+                    process=Movement.PROCESS_DEMONSTRATION, movement_index=0, record=False))
+                self.app.say("executing the pasted action to measure its outcome...")
+                self._pending.append((future, time.monotonic() + self.execute_timeout,
+                                      decision, done))
+            elif isinstance(decision, PaceRequest):
+                if not self._pace.service_is_ready():
+                    raise CommandError("the run has no pace service (is it running, with a "
+                                       "human teacher?)")
+                future = self._pace.call_async(Pace.Request(
+                    command=PACE_COMMANDS[decision.what], steps=decision.steps))
+                self._pending.append((future, time.monotonic() + COMMAND_WAIT, decision,
+                                      done))
+        except CommandError as error:
+            self.app.say(f"refused: {error}", "error")
+            done.set_result({"ok": False, "message": str(error)})
+
+    def _finish(self, future: Future, decision: Any, done: ThreadFuture) -> None:
+        try:
+            if not future.done():
+                future.cancel()
+                raise CommandError("the service did not answer in time")
+            reply = future.result()
+            if isinstance(decision, PaceRequest):
+                self.app.say(reply.message, "info" if reply.accepted else "error")
+                done.set_result({"ok": bool(reply.accepted), "message": reply.message})
+                return
+            landed = reply.status == Movement.STATUS_OK and len(reply.outcome) == 2
+            demo = executed_demonstration(decision, landed, np.asarray(reply.outcome),
+                                          reply.message)
+            with self.app.lock:
+                why = self.app.learner.refusal()
+            if why:
+                raise CommandError(why)
+            done.set_result(self._send(demo))
+        except CommandError as error:
+            self.app.say(f"refused: {error}", "error")
+            done.set_result({"ok": False, "message": str(error)})
+
+    def _send(self, demo: SendDemonstration) -> dict[str, Any]:
+        with self.app.lock:
+            learner = self.app.learner
+            why = learner.refusal()
+            if why:
+                raise CommandError(why)
+            if self._demos.get_subscription_count() == 0:
+                raise CommandError("nobody subscribes to 'demonstrations' (is the learner "
+                                   "running?): nothing sent")
+            learner.demonstrations += 1
+            number, at = learner.demonstrations, learner.movement_count
+        self._demos.publish(Demonstration(
+            stamp=self.get_clock().now().to_msg(), index=number, movement_index=at,
+            action=[float(v) for v in demo.action], outcome=[float(v) for v in demo.outcome],
+            teaching_set_index=demo.teaching_set_index, source="web"))
+        text = f"sent demonstration {number} at movement {at}: {demo.text}"
+        self.app.say(text, "sent")
+        self._queue_render(demo.action, f"demonstration {number}: {demo.text}")
+        return {"ok": True, "message": text, "demonstration": number}
+
+    # --- the cast picture ---------------------------------------------------------------------
+
+    def _queue_render(self, action: np.ndarray, caption: str) -> None:
+        if self._render_casts:
+            self._render_next = (np.asarray(action, dtype=float), caption)
+
+    def _poll_render(self) -> None:
+        if self._render is not None:
+            child, gif, caption = self._render
+            if child.poll() is None:
+                return
+            self._render = None
+            with self.app.lock:
+                self.app.cast["rendering"] = False
+            if child.returncode == 0 and gif.is_file():
+                self._cast_bytes = gif.read_bytes()
+                with self.app.lock:
+                    self.app.cast["version"] += 1
+                    self.app.cast["caption"] = caption
+            else:
+                self.get_logger().warning(f"render_cast failed (exit {child.returncode})")
+        if self._render_next is not None:
+            action, caption = self._render_next
+            self._render_next = None
+            action_file = self._cast_dir / "action.yaml"
+            action_file.write_text(str([float(v) for v in action]))
+            gif = self._cast_dir / "cast.gif"
+            gif.unlink(missing_ok=True)
+            command = [sys.executable, "-m", "sim_bridge.tools.render_cast", "--action",
+                       str(action_file), "--out", str(gif), "--quiet"]
+            self._render = (subprocess.Popen(command, stdout=subprocess.DEVNULL,
+                                             stderr=subprocess.DEVNULL,
+                                             preexec_fn=lambda: os.nice(10)), gif, caption)
+            with self.app.lock:
+                self.app.cast["rendering"] = True
+
+    def destroy_node(self) -> None:
+        self.server.stop()
+        if self._render is not None and self._render[0].poll() is None:
+            self._render[0].kill()
+            self._render[0].wait(timeout=5)
+        for file in self._cast_dir.glob("*"):
+            file.unlink(missing_ok=True)
+        with contextlib.suppress(OSError):
+            self._cast_dir.rmdir()
+        super().destroy_node()
+
+
+def lake_png(size: int = 240) -> bytes:
+    """The water (blue) and land (sand) of the outcome space [-1, 1]^2, y up, as a PNG."""
+    from PIL import Image
+
+    u = (np.arange(size) + 0.5) / size * 2.0 - 1.0
+    ux, uy = np.meshgrid(u, -u)  # row 0 is y = +1
+    water = is_water(scaling.outcome_to_world(np.column_stack([ux.ravel(), uy.ravel()])))
+    rgb = np.where(water.reshape(size, size, 1), np.array([214, 234, 248], np.uint8),
+                   np.array([238, 232, 214], np.uint8)).astype(np.uint8)
+    buffer = io.BytesIO()
+    Image.fromarray(rgb, "RGB").save(buffer, format="PNG", optimize=True)
+    return buffer.getvalue()
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(WebTeacherNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
