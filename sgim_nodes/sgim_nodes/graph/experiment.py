@@ -45,13 +45,18 @@ SOCIAL = ("sgim-d", "demo-only")
 RESPAWNED = ("sim_bridge",)
 MAX_RESPAWNS = 3
 # The arbiter only knows synchronous (automatic) and asynchronous (human) demonstrations.
-TEACHER_MODES = {"automatic": "automatic", "human": "human", "external": "human"}
+TEACHER_MODES = {"automatic": "automatic", "human": "human", "web": "human",
+                 "external": "human"}
+FOREVER = ("forever", "inf", "-1")  # --wait-for-teacher values that mean "until it acts"
 
 
-def nodes_for(learner: str, teacher: str) -> list[tuple[str, str]]:
+def nodes_for(learner: str, teacher: str, markers: bool = True,
+              web: bool = False) -> list[tuple[str, str]]:
     """(package, executable) of every node the learner needs, the arbiter last."""
     nodes = [("sgim_nodes", "recorder"), ("sim_bridge", "sim_bridge"),
              ("sgim_nodes", "evaluator")]
+    if markers:
+        nodes.append(("sgim_nodes", "markers"))
     if learner in GOAL_BABBLERS:
         nodes += [("sgim_nodes", "interest_computer"), ("sgim_nodes", "goal_generator"),
                   ("sgim_nodes", "low_level_explorer")]
@@ -59,6 +64,8 @@ def nodes_for(learner: str, teacher: str) -> list[tuple[str, str]]:
         nodes.append(("sgim_nodes", "imitation"))
         if teacher == "automatic":
             nodes.append(("teacher", "teacher"))
+        elif web:
+            nodes.append(("teacher", "web_teacher"))
     nodes.append(("sgim_nodes", "social_interaction"))
     return nodes
 
@@ -75,8 +82,25 @@ def parameters(args: argparse.Namespace, run_dir: Path) -> dict[str, Any]:
                   eval_every=args.eval_every, demonstration_period=args.period,
                   teacher=TEACHER_MODES[args.teacher] if args.learner in SOCIAL else "none",
                   output=str(run_dir / "bag"), storage=args.storage,
+                  wait_for_teacher=args.wait_for_teacher,
                   wait_for_recorder=True)  # records start only once the recorder hears them
+    if args.teacher == "web":
+        values.update(host=args.web_host, port=args.web_port, token=args.web_token,
+                      address_file=str(run_dir / "web_teacher.url"))
     return values
+
+
+def wait_seconds(text: str) -> float:
+    """--wait-for-teacher: seconds >= 0, or forever (the arbiter's -1)."""
+    if text.strip().lower() in FOREVER:
+        return -1.0
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds or 'forever', got {text!r}") from None
+    if not value >= 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected seconds >= 0 or 'forever', got {text!r}")
+    return value
 
 
 def versions() -> dict[str, str]:
@@ -115,11 +139,26 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                    help="movements between evaluations; paper 250 (default: %(default)s)")
     p.add_argument("--period", type=int, default=150,
                    help="movements between demonstrations; paper 150 (default: %(default)s)")
-    p.add_argument("--teacher", choices=("automatic", "human", "external"),
+    p.add_argument("--teacher", choices=("automatic", "human", "web", "external"),
                    default="automatic",
                    help="automatic: the teacher node, every --period movements; human: you, at "
-                        "the human_input prompt in this terminal; external: no teacher node, "
+                        "the human_input prompt in this terminal; web: you, on the web_teacher "
+                        "page (its address is printed); external: no teacher node, "
                         "demonstrations come from any other publisher at any time")
+    p.add_argument("--wait-for-teacher", type=wait_seconds, default=0.0, metavar="SECONDS",
+                   help="human or web teacher: stop every --period movements and wait this "
+                        "long for a demonstration (0: never wait; 'forever': until the "
+                        "teacher demonstrates or resumes). Default: 0")
+    p.add_argument("--web-port", type=int, default=8765,
+                   help="web teacher: the page's port (0: any free one; default %(default)s)")
+    p.add_argument("--web-host", default="127.0.0.1",
+                   help="web teacher: the interface to serve on (default: this machine only; "
+                        "another one needs an access token, generated unless --web-token)")
+    p.add_argument("--web-token", default="",
+                   help="web teacher: the access token the page's address must carry")
+    p.add_argument("--no-markers", action="store_true",
+                   help="do not start the markers node (MarkerArray topics for rviz2 and "
+                        "Foxglove, recorded in the bag)")
     p.add_argument("--runs-dir", type=Path, default=REPO / "runs",
                    help="where the run folder is made (default: runs/)")
     p.add_argument("--name", help="run folder name (default: <learner>-seed<N>-<time>)")
@@ -141,6 +180,19 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
             p.error(f"--{name} must be >= 1")
     if args.seed < 0 or args.eval_every < 0:
         p.error("--seed and --eval-every must be >= 0")
+    if not 0 <= args.web_port <= 65535:
+        p.error("--web-port must be in 0..65535")
+    if args.teacher == "web":
+        from teacher.web.server import MIN_TOKEN, is_loopback
+
+        if not is_loopback(args.web_host) and not args.web_token:
+            import secrets
+
+            args.web_token = secrets.token_urlsafe(18)
+        if args.web_token and len(args.web_token) < MIN_TOKEN:
+            p.error(f"--web-token must have at least {MIN_TOKEN} characters")
+    if args.wait_for_teacher and args.teacher not in ("human", "web"):
+        p.error("--wait-for-teacher needs a human teacher (--teacher human or web)")
     return args
 
 
@@ -177,6 +229,10 @@ class Progress:
         deadline = time.monotonic() + seconds
         while time.monotonic() < deadline:
             self.executor.spin_once(timeout_sec=0.05)
+
+    def say(self, text: str) -> None:
+        """A line above the progress bar."""
+        self.bar.write(text, file=sys.stderr)
 
     @property
     def over(self) -> bool:
@@ -245,7 +301,8 @@ def run(args: argparse.Namespace) -> int:
         "started": datetime.now(UTC).isoformat(), "parameters": params, "versions": versions(),
     }
     (run_dir / "metadata.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
-    nodes = nodes_for(args.learner, params["teacher"])
+    web = args.teacher == "web" and args.learner in SOCIAL
+    nodes = nodes_for(args.learner, params["teacher"], markers=not args.no_markers, web=web)
     print(f"run_experiment: {args.learner}, seed {args.seed}, {args.movements} movements, "
           f"domain {domain}, {len(nodes)} nodes -> {run_dir}", file=sys.stderr)
     group = ProcessGroup(env=env, log_dir=log_dir)
@@ -256,7 +313,8 @@ def run(args: argparse.Namespace) -> int:
     interrupted = False
     previous = signal.signal(signal.SIGTERM, _interrupt)  # SIGTERM stops a run as Ctrl-C does
     try:
-        progress = Progress(args.movements, args.quiet)
+        # The terminal teacher's prompt shows the count itself: no bar drawn over it.
+        progress = Progress(args.movements, args.quiet or args.teacher == "human")
         packages = dict((exe, pkg) for pkg, exe in nodes)
 
         def launch(executable: str, log_name: str) -> subprocess.Popen:
@@ -268,8 +326,12 @@ def run(args: argparse.Namespace) -> int:
             human = subprocess.Popen([str(ROS2RUN), "teacher", "human_input", "--ros-args",
                                       "--params-file", str(params_file)], env=env)
         arbiter, recorder = procs["social_interaction"], procs["recorder"]
+        address = run_dir / "web_teacher.url" if web else None
         while True:
             progress.spin(0.2)
+            if address is not None and address.exists():
+                progress.say(f"run_experiment: teach at {address.read_text().strip()}")
+                address = None
             if arbiter.poll() is not None or progress.over:
                 break
             if recorder.poll() is not None:
@@ -304,6 +366,9 @@ def run(args: argparse.Namespace) -> int:
         signal.signal(signal.SIGTERM, previous)
         if progress is not None:
             progress.close()
+        if human is not None:  # the prompt says goodbye by itself once the run is over
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                human.wait(timeout=10 if code == 0 else 3)
         group.stop_all()
         if human is not None and human.poll() is None:
             human.terminate()
