@@ -105,6 +105,7 @@ class HumanInputNode(Node):
         self._pace_call: Future | None = None
         self._decile = 0  # progress printed every 10 % of the budget
         self._waiting_turn = False
+        self._held = False
         # A rogue movement must not move the count the teacher's demonstrations carry; the
         # first valid movement sets it (a resumed run does not start at 1).
         self.gate = LiveGate(self.get_logger().warning,
@@ -179,8 +180,10 @@ class HumanInputNode(Node):
             self.notify(f"your turn at movement {msg.movement_index} ({limit}): teach N, "
                         "goal X Y or yaml FILE to demonstrate, resume to go on")
         self._waiting_turn = msg.waiting_for_teacher
-        if msg.message.startswith("step done"):
+        held = msg.paused and msg.held
+        if held and not self._held:  # the pause took effect (a state, not every message)
             self.notify(msg.message)
+        self._held = held
 
     # --- the terminal ----------------------------------------------------------------------
 

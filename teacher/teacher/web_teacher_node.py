@@ -155,8 +155,9 @@ class WebTeacherNode(Node, Api):
     def _on_pace(self, msg: PaceState) -> None:
         with self.app.lock:
             pace = self.app.pace
-            was_waiting = pace.waiting
+            was_waiting, was_held = pace.waiting, pace.paused and pace.held
             pace.known, pace.paused, pace.waiting = True, msg.paused, msg.waiting_for_teacher
+            pace.held = msg.held
             pace.steps_left, pace.wait_seconds = msg.steps_left, msg.wait_seconds
             pace.period = msg.teacher_period
             pace.turn_ends = (time.monotonic() + msg.wait_seconds_left
@@ -165,8 +166,8 @@ class WebTeacherNode(Node, Api):
         if msg.waiting_for_teacher and not was_waiting:
             self.app.say(f"your turn at movement {msg.movement_index}: demonstrate, or "
                          "resume to go on", "turn")
-        elif msg.message and not msg.waiting_for_teacher:
-            self.app.say(f"pace: {msg.message}")
+        elif msg.paused and msg.held and not was_held:
+            self.app.say(msg.message)
 
     # --- the server's questions (HTTP threads) --------------------------------------------
 

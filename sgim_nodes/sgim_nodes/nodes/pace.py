@@ -49,6 +49,8 @@ class PaceControl:
         self.preempt = preempt
         self.count = 0
         self.paused = False
+        self.held = False  # standing still now, in hold() or at a teacher turn
+        self._step_done = False
         self.steps_left = 0
         self.waiting = False
         self.turn_ended = False
@@ -78,19 +80,26 @@ class PaceControl:
         if self.steps_left:
             self.steps_left = max(0, self.steps_left - made)
             if not self.steps_left:
-                self.paused = True
-                self.publish(f"step done: paused at movement {count}")
+                self.paused, self._step_done = True, True
 
     async def hold(self, count: int) -> None:
         """Return once the run is not paused; ``count``: the arbiter's, before its next job."""
         self.count = count
-        while self.paused:
-            await self._change()
+        if not self.paused:
+            return
+        self.held = True
+        done, self._step_done = self._step_done, False
+        self.publish(f"{'step done: ' if done else ''}paused at movement {count}")
+        try:
+            while self.paused:
+                await self._change()
+        finally:
+            self.held = False
 
     async def teacher_turn(self, count: int, demonstration_ready: Callable[[], bool]) -> str:
         """Wait at a teacher turn; returns how it ended, for the log."""
         self.count = count
-        self.waiting, self.turn_ended = True, False
+        self.waiting, self.turn_ended, self.held = True, False, True
         limited = self.wait_seconds > 0
         self.turn_deadline = time.monotonic() + self.wait_seconds if limited else math.inf
         self.publish(f"teacher's turn at movement {count}")
@@ -110,7 +119,7 @@ class PaceControl:
                     return f"no demonstration within {self.wait_seconds:g} s"
                 await first_of(self.node, self._change_future(), min(left, 3600.0))
         finally:
-            self.waiting = False
+            self.waiting = self.held = False
             self.publish(f"teacher's turn at movement {count} over")
 
     def notify(self) -> None:
@@ -158,7 +167,7 @@ class PaceControl:
         if self.count >= self.total:
             return f"budget spent ({self.count}/{self.total})"
         if self.paused:
-            return f"paused at movement {self.count}"
+            return f"{'paused' if self.held else 'pausing'} at movement {self.count}"
         if self.waiting:
             return f"waiting for the teacher at movement {self.count}"
         if self.steps_left:
@@ -169,7 +178,8 @@ class PaceControl:
         left = self.turn_deadline - time.monotonic() if self.waiting else 0.0
         return PaceState(
             stamp=self.node.get_clock().now().to_msg(), movement_index=self.count,
-            total_movements=self.total, paused=self.paused, steps_left=self.steps_left,
+            total_movements=self.total, paused=self.paused, held=self.held,
+            steps_left=self.steps_left,
             waiting_for_teacher=self.waiting, wait_seconds=self.wait_seconds,
             wait_seconds_left=max(0.0, left) if math.isfinite(left) else -1.0,
             teacher_period=self.period, message=self.message)

@@ -58,6 +58,7 @@ class PaceView:
     """The arbiter's pace, as last published (sgim_msgs/PaceState), for the page."""
 
     paused: bool = False
+    held: bool = False  # standing still now (a pause waits for the running job's boundary)
     waiting: bool = False
     steps_left: int = 0
     wait_seconds: float = 0.0
@@ -139,7 +140,7 @@ class WebTeacher:
     def _pace_json(self) -> dict[str, Any]:
         p = self.pace
         left = p.turn_ends - time.monotonic() if p.waiting else 0.0
-        return {"known": p.known, "paused": p.paused, "waiting": p.waiting,
+        return {"known": p.known, "paused": p.paused, "held": p.held, "waiting": p.waiting,
                 "steps_left": p.steps_left, "wait_seconds": p.wait_seconds,
                 "wait_left": None if math.isinf(left) else max(0.0, round(left, 1)),
                 "period": p.period}

@@ -47,7 +47,7 @@
     if (regions && regions.rects.length) {
       for (const [x0, y0, x1, y1, interest] of regions.rects) {
         const f = regions.top > 0 ? interest / regions.top : 0;
-        base.fillStyle = rgb(interestColour(f), 0.35);
+        base.fillStyle = rgb(interestColour(f), 0.28);
         base.fillRect(px(x0), py(y1), px(x1) - px(x0), py(y0) - py(y1));
       }
       base.strokeStyle = "rgba(60,60,60,0.45)";
@@ -86,11 +86,12 @@
       t.outcomes.forEach(([x, y], i) => {
         over.beginPath();
         over.arc(px(x), py(y), 6, 0, 2 * Math.PI);
-        over.fillStyle = t.reached[i] ? "rgba(46,204,64,0.9)" : "rgba(230,40,40,0.9)";
-        over.fill();
-        over.lineWidth = 1.5;
-        over.strokeStyle = "#fff";
-        over.stroke();
+        if (t.reached[i]) {  // a ring: reached goals must not hide the landings near them
+          over.lineWidth = 2.5; over.strokeStyle = "rgba(20,150,40,0.95)"; over.stroke();
+        } else {
+          over.fillStyle = "rgba(230,40,40,0.9)"; over.fill();
+          over.lineWidth = 1.5; over.strokeStyle = "#fff"; over.stroke();
+        }
         over.fillStyle = "#111";
         over.fillText(String(i), px(x) + 8, py(y) - 6);
       });
@@ -156,7 +157,8 @@
     label.textContent = "interest: low";
     box.append(label, bar, "high · teaching goal: ");
     const red = document.createElement("span"); red.className = "dot"; red.style.background = "rgb(230,40,40)";
-    const green = document.createElement("span"); green.className = "dot"; green.style.background = "rgb(46,204,64)";
+    const green = document.createElement("span"); green.className = "dot";
+    green.style.border = "2px solid rgb(20,150,40)"; green.style.width = green.style.height = "7px";
     box.append(red, "unreached", green, "reached");
   }
 
@@ -206,6 +208,7 @@
   function showRun(run, pace) {
     const state = $("run-state");
     view.over = run.state === "finished" || run.state === "aborted";
+    view.runState = run.state;
     state.textContent = run.state === "waiting" ? "waiting for the run" : run.state;
     state.className = `badge${view.over ? " over" : ""}`;
     const badge = $("pace-state");
@@ -214,7 +217,7 @@
       kind = "turn";
       text = pace.wait_left === null ? "your turn" : `your turn: ${Math.ceil(pace.wait_left)} s left`;
     } else if (pace.paused) {
-      kind = "paused"; text = "paused";
+      kind = "paused"; text = pace.held ? "paused" : "pausing...";
     } else if (pace.steps_left) {
       text = `stepping: ${pace.steps_left} left`;
     }
@@ -251,6 +254,10 @@
   }
 
   async function command(body) {
+    if (view.over) {  // the node may be gone already: say it here
+      say(`the run is over (${view.runState}): the learner takes no more demonstrations`, false);
+      return { ok: false };
+    }
     try {
       const reply = await fetch("/api/command", {
         method: "POST", body: JSON.stringify(body),

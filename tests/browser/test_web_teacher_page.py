@@ -1,0 +1,175 @@
+"""The web teacher's page in a real browser (headless Chromium), teaching a real run.
+
+One short SGIM-D run with `--teacher web --wait-for-teacher forever` serves both tests: it
+waits for the teacher before its first movement and every PERIOD movements, so the tests act
+when they choose, on a machine however loaded. The run is checked from its bag.
+
+SGIM_SCREENSHOT=path: also save the page's screenshot there (the README's figure is made so:
+SGIM_SCREENSHOT=docs/figures/web_teacher.png ./test.sh tests/browser).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import time
+
+import numpy as np
+import pytest
+
+from sgim_nodes.core.config import LearnerConfig
+from tests.conftest import REPO
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+RUN = str(REPO / "ros_ws" / "run_experiment.sh")
+MOVEMENTS, PERIOD, SEED = 300, 150, 4
+IMITATIONS = LearnerConfig().imitation_count
+
+
+@pytest.fixture(scope="module")
+def web_run(tmp_path_factory, ros_domain):
+    """The run (waiting at its first teacher turn) and the page open on it."""
+    from sgim_nodes.graph.processes import ProcessGroup, group_is_empty
+    from teacher.web.headless import browser_page
+
+    runs = tmp_path_factory.mktemp("web-runs")
+    group = ProcessGroup(env=dict(os.environ), log_dir=runs / "logs")
+    child = group.start("web-run", [
+        RUN, "sgim-d", "--seed", str(SEED), "--movements", str(MOVEMENTS), "--eval-every",
+        "100", "--period", str(PERIOD), "--teacher", "web", "--wait-for-teacher", "forever",
+        "--web-port", "0", "--runs-dir", str(runs), "--name", "web", "--domain",
+        str(ros_domain), "--quiet", "--timeout", "400"],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    address = runs / "web" / "web_teacher.url"
+    try:
+        deadline = time.monotonic() + 120
+        while not address.exists():
+            assert child.poll() is None, child.stdout.read()[-3000:]
+            assert time.monotonic() < deadline, "the web teacher never served its page"
+            time.sleep(0.2)
+        with browser_page() as page:
+            page.goto(address.read_text().strip())
+            yield child, page, runs / "web"
+    finally:
+        group.stop_all()
+        leftovers = [c.pid for c in group.children if not group_is_empty(c.pid)]
+        assert not leftovers, f"processes left behind: {leftovers}"
+
+
+def message(page) -> str:
+    return page.locator("#message").inner_text()
+
+
+def wait_for_message(page, pattern: str, timeout: float = 30.0) -> str:
+    page.wait_for_function(
+        "p => new RegExp(p).test(document.querySelector('#message').textContent)",
+        arg=pattern, timeout=timeout * 1000)
+    return message(page)
+
+
+def wait_for_turn(page, movement: int, timeout: float = 180.0) -> None:
+    """Until the page shows the teacher's turn at ``movement``."""
+    page.wait_for_function(
+        "m => document.querySelector('#pace-state').textContent.startsWith('your turn') "
+        "&& Number(document.querySelector('#count').textContent) === m",
+        arg=movement, timeout=timeout * 1000)
+
+
+def test_bad_input_from_the_page_is_refused_with_a_message(web_run):
+    _, page, _ = web_run
+    wait_for_turn(page, 0)
+    for text, expected in [
+            ("1 2 3", "the pasted action has 3 numbers, 24 are needed"),
+            (" ".join(["0.1"] * 23 + ["2"]), r"the pasted action\[23\] = 2 is outside \[-1, 1\]"),
+            (" ".join(["nan"] + ["0"] * 23), r"the pasted action\[0\] is NaN"),
+            ("", "the pasted action is empty"),
+            (", ".join(["0.1"] * 23 + ["x"]), r"the pasted action\[23\] is 'x', not a number")]:
+        page.fill("#action-text", text)
+        page.click("#send-action")
+        assert re.search(expected, wait_for_message(page, expected))
+        assert page.locator("#message").get_attribute("class") == "error"
+    # The refusals are in the page's log too, and nothing was sent.
+    page.wait_for_function("document.querySelectorAll('#log li.error').length >= 5")
+    assert page.locator("#demos").inner_text() == "0"
+    # A command the server cannot read is refused with a message, not a crash.
+    reply = page.evaluate("""async () => {
+        const r = await fetch('/api/command', {method: 'POST', body: '{"command": "teach", '
+            + '"index": 999}', headers: {'X-Teacher': '1'}});
+        return await r.json(); }""")
+    assert reply == {"ok": False, "message": "no teaching-set entry 999: entries are 0 to 25"}
+    forged = page.evaluate("""async () => (await fetch('/api/command', {method: 'POST',
+        body: '{"command": "pace", "what": "pause"}'})).status""")
+    assert forged == 403  # no X-Teacher header: what a cross-site form would send
+
+
+def test_teach_a_run_from_the_page(web_run):
+    from sgim_msgs.msg import Movement
+    from sgim_nodes.bag.reader import load_run
+
+    child, page, run_dir = web_run
+    wait_for_turn(page, 0)
+    page.click("#resume")  # go on without a demonstration
+    # Landings appear as the run goes, coloured by process, until the next turn.
+    page.wait_for_function("window.teacherStats.landings > 20", timeout=120_000)
+    wait_for_turn(page, PERIOD)
+    landed = page.evaluate("window.teacherStats.landings")
+    assert 20 < landed <= PERIOD
+    # Click an unreached (red) teaching goal on the picture.
+    reached = page.evaluate("window.teacherPage.view.teaching.reached")
+    unreached = [i for i, r in enumerate(reached) if not r]
+    assert unreached, "every teaching goal reached after 150 movements: nothing to click"
+    goal = unreached[len(unreached) // 2]
+    at = page.evaluate(f"window.teacherPage.teachingPixel({goal})")
+    page.locator("#overlay").click(position={"x": at["x"], "y": at["y"]})
+    sent = wait_for_message(page, "sent demonstration 1")
+    assert f"teaching-set entry {goal}" in sent
+    # The demonstration ended the turn: pause while its cast is drawn, then resume.
+    page.click("#pause")
+    wait_for_message(page, "pausing at movement|already paused")
+    page.wait_for_function("document.querySelector('#pace-state').textContent === 'paused'",
+                           timeout=60_000)
+    paused_at = int(page.locator("#count").inner_text())
+    assert paused_at >= PERIOD
+    page.wait_for_function("!document.querySelector('#cast').classList.contains('hidden') && "
+                           "document.querySelector('#cast').naturalWidth > 0", timeout=120_000)
+    assert f"demonstration 1: teaching-set entry {goal}" in page.locator(
+        "#cast-caption").inner_text()
+    time.sleep(1.0)
+    assert int(page.locator("#count").inner_text()) == paused_at  # paused means paused
+    page.click("#resume")
+    output, _ = child.communicate(timeout=300)
+    assert child.returncode == 0, output[-3000:]
+    assert "teach at http://127.0.0.1:" in output
+    # The page knows the run is over and says so when asked for another demonstration.
+    page.wait_for_function("document.querySelector('#run-state').textContent === 'finished'",
+                           timeout=30_000)
+    page.locator("#overlay").click(position={"x": at["x"], "y": at["y"]})
+    assert "the run is over (finished)" in wait_for_message(page, "the run is over")
+    stats = page.evaluate("window.teacherStats")
+    assert stats["updates"] > 20 and stats["landings"] > landed
+    if os.environ.get("SGIM_SCREENSHOT"):
+        page.screenshot(path=os.environ["SGIM_SCREENSHOT"])
+
+    # The bag: the learner received exactly that demonstration and imitated it at once.
+    from sim_bridge.data_files import load_teaching_set
+
+    teaching = load_teaching_set()
+    run = load_run(run_dir / "bag")
+    assert [m.index for m in run.movements] == list(range(1, MOVEMENTS + 1))
+    (demo,) = run.demonstrations
+    assert demo.source == "web" and demo.teaching_set_index == goal
+    assert demo.movement_index == PERIOD
+    assert np.array_equal(demo.action, teaching.actions[goal])
+    assert np.array_equal(demo.outcome, teaching.outcomes[goal])
+    follow = run.movements[PERIOD: PERIOD + IMITATIONS]
+    assert all(m.process == Movement.PROCESS_IMITATION for m in follow)
+    assert all(np.allclose(m.goal, demo.outcome) for m in follow)
+    assert all(np.linalg.norm(m.action - demo.action) < LearnerConfig().imitation_epsilon
+               for m in follow)
+    imitations = [m for m in run.movements if m.process == Movement.PROCESS_IMITATION]
+    assert len(imitations) == IMITATIONS
+    # The page's picture was the run's: every landing of the bag was drawn.
+    landed_in_bag = sum(m.status == Movement.STATUS_OK for m in run.movements)
+    assert stats["landings"] == landed_in_bag
