@@ -18,7 +18,8 @@
   const cursor = { landings: 0, evaluations: 0, regions: -1, teaching: -1, log: 0 };
   const view = { legend: null, lake: null, regions: null, teaching: null, goal: null,
                  evaluations: [], count: 0, total: 0, offer: null, castVersion: 0, over: false };
-  const stats = { updates: 0, totalMs: 0, maxMs: 0, lastMs: 0, landings: 0, failures: 0 };
+  const stats = { updates: 0, totalMs: 0, maxMs: 0, lastMs: 0, slow: 0, landings: 0,
+                  failures: 0, started: performance.now() };
   window.teacherStats = stats;
 
   const px = (x) => ((x + 1) / 2) * W;
@@ -237,6 +238,7 @@
       const ms = performance.now() - t0;
       stats.updates += 1; stats.totalMs += ms; stats.lastMs = ms;
       stats.maxMs = Math.max(stats.maxMs, ms);
+      if (ms > 50) stats.slow += 1;  // a frame a person would notice
       setTimeout(poll, POLL_MS);
     } catch (error) {
       stats.failures += 1;
