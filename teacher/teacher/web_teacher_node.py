@@ -149,7 +149,8 @@ class WebTeacherNode(Node, Api):
             elif msg.state == RunStatus.STATE_ABORTED:
                 learner.run_over = f"aborted: {msg.message}"
         if msg.message and msg.message not in ("started", ""):
-            level = "warning" if "not taken" in msg.message or msg.state == 2 else "info"
+            level = ("warning" if "not taken" in msg.message
+                     or msg.state == RunStatus.STATE_ABORTED else "info")
             self.app.say(f"run: {msg.message}", level)
 
     def _on_pace(self, msg: PaceState) -> None:

@@ -17,8 +17,10 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import ipaddress
 import os
 import platform
+import secrets
 import signal
 import subprocess
 import sys
@@ -48,6 +50,15 @@ MAX_RESPAWNS = 3
 TEACHER_MODES = {"automatic": "automatic", "human": "human", "web": "human",
                  "external": "human"}
 FOREVER = ("forever", "inf", "-1")  # --wait-for-teacher values that mean "until it acts"
+WEB_TOKEN_MIN = 16  # the web teacher's own minimum (teacher.web.server.MIN_TOKEN)
+
+
+def is_loopback(host: str) -> bool:
+    """Whether the web teacher would serve this machine only (no token needed)."""
+    try:
+        return host == "localhost" or ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
 
 
 def nodes_for(learner: str, teacher: str, markers: bool = True,
@@ -183,14 +194,10 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     if not 0 <= args.web_port <= 65535:
         p.error("--web-port must be in 0..65535")
     if args.teacher == "web":
-        from teacher.web.server import MIN_TOKEN, is_loopback
-
         if not is_loopback(args.web_host) and not args.web_token:
-            import secrets
-
             args.web_token = secrets.token_urlsafe(18)
-        if args.web_token and len(args.web_token) < MIN_TOKEN:
-            p.error(f"--web-token must have at least {MIN_TOKEN} characters")
+        if args.web_token and len(args.web_token) < WEB_TOKEN_MIN:
+            p.error(f"--web-token must have at least {WEB_TOKEN_MIN} characters")
     if args.wait_for_teacher and args.teacher not in ("human", "web"):
         p.error("--wait-for-teacher needs a human teacher (--teacher human or web)")
     return args
