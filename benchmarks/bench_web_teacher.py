@@ -2,10 +2,14 @@
 
 Runs the same SGIM-D run (same seed, no demonstration: the same movements) with the web
 teacher, alternately without a page and with the page open in headless Chromium, and prints
-the arbiter's run time of each (from its start to its last movement and final evaluation, as
-its log says; the nodes' start-up is not the page's cost), their medians and the overhead
-(target: under 5 %). For the runs with a page it prints how the page kept up: updates per
-second (target >= 2), the mean and longest time to apply one update, and updates over 50 ms.
+for each: the arbiter's run time (from its start to its last movement and final evaluation,
+as its log says; the nodes' start-up is not the page's cost), the CPU time of the run's
+processes (every node, from wait4) and of the browser, and the machine's load. Then the
+medians and the page's overhead (target: under 5 %), in run time and in CPU time: on a
+machine shared with other jobs the run time swings by tens of percent from run to run, while
+CPU time (what the page adds to the machine's work) barely depends on the neighbours. For
+the runs with a page it prints how the page kept up: updates per second (target >= 2), the
+mean and longest time to apply one update, and updates over 50 ms.
 
     source ros_ws/env.sh
     python benchmarks/bench_web_teacher.py --movements 1000 --repeats 3
@@ -15,7 +19,9 @@ second (target >= 2), the mean and longest time to apply one update, and updates
 from __future__ import annotations
 
 import argparse
+import os
 import re
+import resource
 import statistics
 import subprocess
 import sys
@@ -36,19 +42,26 @@ def one_run(out: Path, name: str, movements: int, seed: int, page: bool) -> dict
         stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
     stats: dict = {}
     started = time.perf_counter()
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    load = os.getloadavg()[0]
     if page:
         viewer = threading.Thread(target=watch, args=(out / name, child, stats))
         viewer.start()
-    code = child.wait()
+    _, status, usage = os.wait4(child.pid, 0)  # the launcher and every node it waited for
+    child.returncode = code = os.waitstatus_to_exitcode(status)
     wall = time.perf_counter() - started
     if page:
         viewer.join()
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    run_cpu = usage.ru_utime + usage.ru_stime
+    # What else our children used meanwhile: the browser and Playwright's driver.
+    page_cpu = (after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime) - run_cpu
     if code != 0:
         raise SystemExit(f"run {name} failed (exit {code}); see {out / name}")
     log = (out / name / "logs" / "social_interaction.log").read_text()
     count, seconds = FINISHED.search(log).groups()
     return {"name": name, "run_s": float(seconds), "wall_s": wall, "movements": int(count),
-            **stats}
+            "run_cpu": run_cpu, "page_cpu": max(0.0, page_cpu), "load": load, **stats}
 
 
 def watch(run_dir: Path, child: subprocess.Popen, stats: dict) -> None:
@@ -98,14 +111,24 @@ def main() -> int:
                         page)
             results[page].append(r)
             print(f"{r['name']:8s} run {r['run_s']:6.1f} s  wall {r['wall_s']:6.1f} s  "
-                  + (describe_page(r) if page else ""), flush=True)
-    with_page = statistics.median(r["run_s"] for r in results[True])
-    print(f"\n{args.movements} movements, seed {args.seed}, {args.repeats} repeat(s); "
-          f"median run time with the page open: {with_page:.1f} s")
+                  f"CPU run {r['run_cpu']:6.1f} s  browser {r['page_cpu']:5.1f} s  "
+                  f"load {r['load']:4.1f}  " + (describe_page(r) if page else ""), flush=True)
+    def median(page: bool, key: str) -> float:
+        return statistics.median(r[key] for r in results[page])
+
+    with_page = median(True, "run_s")
+    cpu_with = median(True, "run_cpu") + median(True, "page_cpu")
+    print(f"\n{args.movements} movements, seed {args.seed}, {args.repeats} repeat(s); with the "
+          f"page open: run time {with_page:.1f} s, CPU {median(True, 'run_cpu'):.1f} s (run) "
+          f"+ {median(True, 'page_cpu'):.1f} s (browser)")
     if results[False]:
-        without = statistics.median(r["run_s"] for r in results[False])
-        print(f"median run time without a page: {without:.1f} s; overhead of the page: "
-              f"{100 * (with_page - without) / without:+.1f} % (target < 5 %)")
+        without, cpu_without = median(False, "run_s"), median(False, "run_cpu")
+        print(f"without a page: run time {without:.1f} s, CPU {cpu_without:.1f} s")
+        nodes = median(True, "run_cpu")
+        print(f"overhead of the page: run time {100 * (with_page - without) / without:+.1f} %, "
+              f"CPU of the run's nodes {100 * (nodes - cpu_without) / cpu_without:+.1f} %, "
+              f"CPU with the browser's {100 * (cpu_with - cpu_without) / cpu_without:+.1f} % "
+              "(target < 5 %)")
     return 0
 
 
