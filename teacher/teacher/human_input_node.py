@@ -341,7 +341,8 @@ class Spinner(threading.Thread):
                 self.node.poll()
                 if self.node.finished and not self.stopping.is_set():
                     self.stopping.set()
-                    os.kill(os.getpid(), signal.SIGINT)  # leave input() in the main thread
+                    if self.node.at_prompt:  # leave input() in the main thread
+                        os.kill(os.getpid(), signal.SIGINT)
         except ExternalShutdownException:
             pass
         finally:
@@ -421,8 +422,10 @@ def main(args: list[str] | None = None) -> int:
     try:
         run(node)
     except KeyboardInterrupt:
-        node.say("\ninterrupted: bye")
+        if not node.finished:  # else the spinner's wake-up came late: all was said
+            node.say("\ninterrupted: bye")
     finally:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
         node.destroy_node()
         rclpy.try_shutdown()
     return 0

@@ -150,7 +150,8 @@ def test_teach_a_run_from_the_page(web_run):
     stats = page.evaluate("window.teacherStats")
     assert stats["updates"] > 20 and stats["landings"] > landed
     if os.environ.get("SGIM_SCREENSHOT"):
-        page.screenshot(path=os.environ["SGIM_SCREENSHOT"])
+        page.evaluate("window.scrollTo(0, 0)")
+        page.screenshot(path=os.environ["SGIM_SCREENSHOT"], full_page=True)
 
     # The bag: the learner received exactly that demonstration and imitated it at once.
     from sim_bridge.data_files import load_teaching_set

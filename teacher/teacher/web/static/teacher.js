@@ -1,10 +1,11 @@
 // The web teacher's page: polls /api/state with cursors of what it already drew, and draws
 // only what changed: new landings onto their own canvas (never redrawn during a run), the
-// region tree onto the base canvas when its version moves, goals on a small overlay.
+// region tree onto the base canvas when its version moves, goals on a small overlay when a
+// goal moved; texts are written only when they change (each write costs the browser a layout).
 // window.teacherStats says how long each update took (benchmarks/bench_web_teacher.py).
 "use strict";
 (() => {
-  const POLL_MS = 250;
+  const POLL_MS = 300;  // about 3 updates a second (each waits for the previous answer)
   const token = new URLSearchParams(location.search).get("token") || "";
   const auth = token ? { "X-Teacher-Token": token } : {};
   const withToken = (url) => (token ? `${url}${url.includes("?") ? "&" : "?"}token=${encodeURIComponent(token)}` : url);
@@ -21,6 +22,14 @@
   const stats = { updates: 0, totalMs: 0, maxMs: 0, lastMs: 0, slow: 0, landings: 0,
                   failures: 0, started: performance.now() };
   window.teacherStats = stats;
+
+  const shown = new Map();  // element id -> text on screen
+  const setText = (id, text) => {
+    const value = String(text);
+    if (shown.get(id) !== value) { shown.set(id, value); $(id).textContent = value; }
+  };
+  const setClass = (id, name) => { if ($(id).className !== name) $(id).className = name; };
+  let overlayKey = "";
 
   const px = (x) => ((x + 1) / 2) * W;
   const py = (y) => ((1 - y) / 2) * H;
@@ -79,7 +88,10 @@
     stats.landings = batch.from + batch.x.length;
   }
 
-  function drawOverlay() {
+  function drawOverlay(force = false) {
+    const key = JSON.stringify([view.goal, cursor.teaching, view.offer && view.offer.id]);
+    if (key === overlayKey && !force) return;  // nothing on it moved
+    overlayKey = key;
     over.clearRect(0, 0, W, H);
     const t = view.teaching;
     if (t) {
@@ -167,20 +179,23 @@
 
   function apply(s) {
     view.count = s.count; view.total = s.total; view.goal = s.goal;
-    $("learner").textContent = s.learner || "-";
-    $("count").textContent = s.count;
-    $("total").textContent = s.total || "?";
-    $("progress-bar").style.width = s.total ? `${Math.min(100, (100 * s.count) / s.total)}%` : "0";
-    $("failed").textContent = s.failed;
-    $("demos").textContent = s.demonstrations_given;
-    if (s.landings.x.length || s.landings.from === 0) drawLandings(s.landings);
+    setText("learner", s.learner || "-");
+    setText("count", s.count);
+    setText("total", s.total || "?");
+    const width = s.total ? `${Math.min(100, Math.floor((100 * s.count) / s.total))}%` : "0";
+    if ($("progress-bar").style.width !== width) $("progress-bar").style.width = width;
+    setText("failed", s.failed);
+    setText("demos", s.demonstrations_given);
+    if (s.landings.x.length || (s.landings.from === 0 && stats.landings > 0)) {
+      drawLandings(s.landings);
+    }
     cursor.landings = s.landings.from + s.landings.x.length;
-    $("landed").textContent = cursor.landings;
+    setText("landed", cursor.landings);
     if (s.regions) { view.regions = s.regions; cursor.regions = s.regions.version; drawBase(); }
     if (s.teaching) {
       view.teaching = s.teaching; cursor.teaching = s.teaching.version;
-      $("reached").textContent = s.teaching.reached.filter(Boolean).length;
-      $("teaching-total").textContent = s.teaching.reached.length;
+      setText("reached", s.teaching.reached.filter(Boolean).length);
+      setText("teaching-total", s.teaching.reached.length);
     }
     if (s.evaluations.points.length) {
       view.evaluations = view.evaluations.slice(0, s.evaluations.from).concat(s.evaluations.points);
@@ -193,26 +208,24 @@
       $("log").prepend(li);
       cursor.log = number;
     }
-    while ($("log").children.length > 200) $("log").lastChild.remove();
+    if (s.log.length) while ($("log").children.length > 200) $("log").lastChild.remove();
     showRun(s.run, s.pace);
     if (s.cast.version > view.castVersion) {
       view.castVersion = s.cast.version;
       $("cast").src = withToken(`/cast.gif?v=${s.cast.version}`);
       $("cast").classList.remove("hidden");
-      $("cast-caption").textContent = s.cast.caption;
+      setText("cast-caption", s.cast.caption);
     } else if (s.cast.rendering && !view.castVersion) {
-      $("cast-caption").textContent = "drawing the cast...";
+      setText("cast-caption", "drawing the cast...");
     }
     drawOverlay();
   }
 
   function showRun(run, pace) {
-    const state = $("run-state");
     view.over = run.state === "finished" || run.state === "aborted";
     view.runState = run.state;
-    state.textContent = run.state === "waiting" ? "waiting for the run" : run.state;
-    state.className = `badge${view.over ? " over" : ""}`;
-    const badge = $("pace-state");
+    setText("run-state", run.state === "waiting" ? "waiting for the run" : run.state);
+    setClass("run-state", `badge${view.over ? " over" : ""}`);
     let text = "", kind = "";
     if (pace.waiting) {
       kind = "turn";
@@ -222,9 +235,10 @@
     } else if (pace.steps_left) {
       text = `stepping: ${pace.steps_left} left`;
     }
-    badge.textContent = text;
-    badge.className = `badge ${kind}${text && !view.over ? "" : " hidden"}`;
-    for (const id of ["pause", "resume", "step"]) $(id).disabled = view.over || !pace.known;
+    setText("pace-state", text);
+    setClass("pace-state", `badge ${kind}${text && !view.over ? "" : " hidden"}`);
+    const disabled = view.over || !pace.known;
+    for (const id of ["pause", "resume", "step"]) if ($(id).disabled !== disabled) $(id).disabled = disabled;
   }
 
   async function poll() {
@@ -299,10 +313,10 @@
       $("offer-text").textContent = answer.offer.text;
       $("offer").classList.remove("hidden");
     }
-    drawOverlay();
+    drawOverlay(true);
   });
 
-  function closeOffer() { view.offer = null; $("offer").classList.add("hidden"); drawOverlay(); }
+  function closeOffer() { view.offer = null; $("offer").classList.add("hidden"); drawOverlay(true); }
   $("confirm").addEventListener("click", async () => {
     if (!view.offer) return;
     const answer = await command({ command: "confirm", offer: view.offer.id });
