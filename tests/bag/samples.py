@@ -86,6 +86,13 @@ def run_status(movement_index: int, total: int, state: int, message: str = ""):
                                         state=state, message=message)
 
 
+def pace_state(movement_index: int, paused: bool, waiting: bool, message: str = ""):
+    return T["sgim_msgs/msg/PaceState"](
+        stamp=stamp(23), movement_index=movement_index, total_movements=300, paused=paused,
+        held=paused, steps_left=0, waiting_for_teacher=waiting, wait_seconds=-1.0,
+        wait_seconds_left=-1.0, teacher_period=150, message=message)
+
+
 def synthetic_run(n: int = 60, seed: int = 0) -> list[tuple[str, object]]:
     """(topic, message) in publication order for an n-movement SGIM-D-like run."""
     rng = np.random.default_rng(seed)

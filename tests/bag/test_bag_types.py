@@ -22,6 +22,7 @@ def _one_of_each() -> dict[str, object]:
         "sgim_msgs/msg/Demonstration": samples.demonstration(1, 4, rng),
         "sgim_msgs/msg/Evaluation": samples.evaluation(20, rng),
         "sgim_msgs/msg/RunStatus": samples.run_status(5, 10, 2, "stopped by a test"),
+        "sgim_msgs/msg/PaceState": samples.pace_state(150, True, True, "teacher's turn"),
     }
 
 
