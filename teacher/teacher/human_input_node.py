@@ -263,7 +263,8 @@ class HumanInputNode(Node):
                  f"{self.state.movement_count}: {demo.text}")
 
     def _start_pace(self, request: PaceRequest) -> None:
-        if not self._pace.service_is_ready():
+        # Discovery of a service takes a moment after the run starts: give it a few seconds.
+        if not self._pace.service_is_ready() and not self._pace.wait_for_service(5.0):
             raise CommandError("the run has no pace service (is the learner running, with "
                                "teacher: human?)")
         self._pace_call = self._pace.call_async(Pace.Request(

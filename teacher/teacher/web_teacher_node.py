@@ -86,6 +86,7 @@ PARAMS = (
 PACE_COMMANDS = {"pause": Pace.Request.PAUSE, "resume": Pace.Request.RESUME,
                  "step": Pace.Request.STEP}
 COMMAND_WAIT = 10.0  # seconds the page waits for a command that needs no simulator
+SERVICE_WAIT = 5.0  # seconds a command waits for its service to be discovered
 
 
 class WebTeacherNode(Node, Api):
@@ -104,6 +105,7 @@ class WebTeacherNode(Node, Api):
                               LearnerState(library.action_size))
         self._queue: queue.Queue[tuple[Any, ThreadFuture]] = queue.Queue()
         self._pending: list[tuple[Future, float, Any, ThreadFuture]] = []
+        self._waiting: list[tuple[Any, ThreadFuture, float]] = []  # for their service
         self._demos = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
         follow(self, self.app.picture, self.app.lock)
         self.create_subscription(Movement, "movements", self._on_movement, qos.RECORDS)
@@ -194,8 +196,8 @@ class WebTeacherNode(Node, Api):
             return decision
         done: ThreadFuture = ThreadFuture()
         self._queue.put((decision, done))
-        wait = COMMAND_WAIT + (self.execute_timeout if isinstance(decision, ExecuteFirst)
-                               else 0.0)
+        wait = COMMAND_WAIT + SERVICE_WAIT + (
+            self.execute_timeout if isinstance(decision, ExecuteFirst) else 0.0)
         try:
             return done.result(timeout=wait)
         except ThreadTimeout:
@@ -210,13 +212,26 @@ class WebTeacherNode(Node, Api):
                 decision, done = self._queue.get_nowait()
             except queue.Empty:
                 break
-            self._start(decision, done)
+            self._waiting.append((decision, done, time.monotonic() + SERVICE_WAIT))
+        for item in list(self._waiting):  # a service a client has not matched yet
+            decision, done, deadline = item
+            if self._ready(decision) or time.monotonic() > deadline:
+                self._waiting.remove(item)
+                self._start(decision, done)
         for item in list(self._pending):
             future, deadline, decision, done = item
             if future.done() or time.monotonic() > deadline:
                 self._pending.remove(item)
                 self._finish(future, decision, done)
         self._poll_render()
+
+    def _ready(self, decision: Any) -> bool:
+        """Whether the service the decision needs is matched (discovery takes a moment)."""
+        if isinstance(decision, ExecuteFirst):
+            return self._execute.service_is_ready()
+        if isinstance(decision, PaceRequest):
+            return self._pace.service_is_ready()
+        return True
 
     def _start(self, decision: Any, done: ThreadFuture) -> None:
         try:
@@ -315,7 +330,8 @@ class WebTeacherNode(Node, Api):
             gif = self._cast_dir / "cast.gif"
             gif.unlink(missing_ok=True)
             command = [sys.executable, "-m", "sim_bridge.tools.render_cast", "--action",
-                       str(action_file), "--out", str(gif), "--quiet"]
+                       str(action_file), "--out", str(gif), "--size", "240x180", "--fps", "20",
+                       "--quiet"]
             self._render = (subprocess.Popen(command, stdout=subprocess.DEVNULL,
                                              stderr=subprocess.DEVNULL,
                                              preexec_fn=lambda: os.nice(10)), gif, caption)

@@ -111,6 +111,7 @@ def test_teach_a_run_from_the_page(web_run):
     child, page, run_dir = web_run
     wait_for_turn(page, 0)
     page.click("#resume")  # go on without a demonstration
+    wait_for_message(page, "going on without a demonstration")
     # Landings appear as the run goes, coloured by process, until the next turn.
     page.wait_for_function("window.teacherStats.landings > 20", timeout=120_000)
     wait_for_turn(page, PERIOD)
@@ -133,7 +134,7 @@ def test_teach_a_run_from_the_page(web_run):
     paused_at = int(page.locator("#count").inner_text())
     assert paused_at >= PERIOD
     page.wait_for_function("!document.querySelector('#cast').classList.contains('hidden') && "
-                           "document.querySelector('#cast').naturalWidth > 0", timeout=120_000)
+                           "document.querySelector('#cast').naturalWidth > 0", timeout=300_000)
     assert f"demonstration 1: teaching-set entry {goal}" in page.locator(
         "#cast-caption").inner_text()
     time.sleep(1.0)
