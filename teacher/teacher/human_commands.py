@@ -45,7 +45,8 @@ from sgim_nodes.core.memory import Memory
 from sgim_nodes.core.teaching import Teacher
 
 OUTCOME_SIZE = 2
-# The automatic teacher's default, so that both teachers call the same goals "reached".
+# The Teacher class's default; the nodes pass the automatic teacher's own tolerance
+# (tolerance_noise x outcome_noise, sgim_nodes.nodes.picture_feed.REACH_PARAMS).
 DEFAULT_TOLERANCE: float = inspect.signature(Teacher).parameters["tolerance"].default
 
 HELP = """commands:

@@ -22,7 +22,8 @@ Interfaces:
   client   execute_action  (sgim_msgs/srv/ExecuteAction): measures a YAML file's action, with
                            record=false so the learner's history is untouched
   client   pace            (sgim_msgs/srv/Pace): pause, resume, step
-Parameters: tolerance, teaching_set, execute_timeout (see PARAMS).
+Parameters: tolerance_noise, outcome_noise (the automatic teacher's "reached"), teaching_set,
+execute_timeout (see PARAMS).
 """
 
 from __future__ import annotations
@@ -48,11 +49,11 @@ from rclpy.task import Future
 from sgim_msgs.msg import Demonstration, Evaluation, Movement, PaceState, RunStatus
 from sgim_msgs.srv import ExecuteAction, Pace
 from sgim_nodes.bag.validation import Limits, LiveGate
+from sgim_nodes.nodes.picture_feed import REACH_PARAMS, reach_tolerance
 from sgim_ros import qos
-from sgim_ros.params import Param, ParameterError, declare, non_negative, positive
+from sgim_ros.params import Param, ParameterError, declare, positive
 from sim_bridge.data_files import load_teaching_set
 from teacher.human_commands import (
-    DEFAULT_TOLERANCE,
     OUTCOME_SIZE,
     CommandError,
     ExecuteFirst,
@@ -69,9 +70,7 @@ from teacher.human_commands import (
 )
 
 PARAMS = (
-    Param("tolerance", DEFAULT_TOLERANCE,
-          "distance (outcome units) under which a teaching goal counts as reached; the "
-          "automatic teacher's default", non_negative, ">= 0"),
+    *REACH_PARAMS,
     Param("teaching_set", "",
           "path of a teaching-set .npz (actions, outcomes, spread); empty: the packaged set"),
     Param("execute_timeout", 30.0,
@@ -91,7 +90,8 @@ class HumanInputNode(Node):
         where = p["teaching_set"] or "the packaged teaching set"
         try:
             teaching = load_teaching_set(p["teaching_set"] or None)
-            self.library = TeachingLibrary(teaching.actions, teaching.outcomes, p["tolerance"])
+            self.library = TeachingLibrary(teaching.actions, teaching.outcomes,
+                                           reach_tolerance(p))
         except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as error:
             raise ParameterError(f"parameter 'teaching_set': cannot use {where}: {error}") \
                 from None
@@ -123,7 +123,8 @@ class HumanInputNode(Node):
         self._execute = self.create_client(ExecuteAction, "execute_action")
         self._pace = self.create_client(Pace, "pace")
         self.say(f"human teacher: {len(self.library.actions)} teaching-set entries from "
-                 f"{where}, reach tolerance {p['tolerance']:g}; type 'help' for the commands")
+                 f"{where}, reach tolerance {self.library.teacher.tolerance:g}; type 'help' "
+                 "for the commands")
 
     def _locked(self, callback):
         def locked(msg) -> None:

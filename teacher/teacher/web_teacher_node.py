@@ -18,7 +18,8 @@ Interfaces:
   topics    movements, region_map, goals, evaluations, demonstrations, run_status,
             pace_state (subscribed); demonstrations (published, source "web")
   clients   execute_action (measures a pasted action, record=false), pace (the arbiter's)
-Parameters: host, port, token, address_file, tolerance, teaching_set, execute_timeout,
+Parameters: host, port, token, address_file, tolerance_noise, outcome_noise, teaching_set,
+execute_timeout,
 render_casts (see PARAMS).
 """
 
@@ -45,16 +46,15 @@ from rclpy.task import Future
 
 from sgim_msgs.msg import Demonstration, Movement, PaceState, RunStatus
 from sgim_msgs.srv import ExecuteAction, Pace
-from sgim_nodes.nodes.picture_feed import follow
+from sgim_nodes.nodes.picture_feed import REACH_PARAMS, follow, reach_tolerance
 from sgim_nodes.view.picture import LivePicture
 from sgim_ros import qos
 from sgim_ros.entry import run_node
-from sgim_ros.params import Param, ParameterError, declare, non_negative, positive
+from sgim_ros.params import Param, ParameterError, declare, positive
 from sim_bridge import scaling
 from sim_bridge.data_files import load_teaching_set
 from sim_bridge.lake import is_water
 from teacher.human_commands import (
-    DEFAULT_TOLERANCE,
     CommandError,
     ExecuteFirst,
     LearnerState,
@@ -75,8 +75,7 @@ PARAMS = (
           "interface other than loopback (16 characters at least)"),
     Param("address_file", "", "file to write the page's address into once it serves (for "
           "launchers and tests); empty: none"),
-    Param("tolerance", DEFAULT_TOLERANCE, "distance under which a teaching goal counts as "
-          "reached (the automatic teacher's)", non_negative, ">= 0"),
+    *REACH_PARAMS,
     Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one"),
     Param("execute_timeout", 30.0, "seconds to wait for execute_action to measure a pasted "
           "action", positive, "> 0"),
@@ -96,7 +95,7 @@ class WebTeacherNode(Node, Api):
         where = p["teaching_set"] or "the packaged teaching set"
         try:
             teaching = load_teaching_set(p["teaching_set"] or None)
-            library = TeachingLibrary(teaching.actions, teaching.outcomes, p["tolerance"])
+            library = TeachingLibrary(teaching.actions, teaching.outcomes, reach_tolerance(p))
         except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as error:
             raise ParameterError(f"parameter 'teaching_set': cannot use {where}: {error}") \
                 from None
@@ -129,7 +128,7 @@ class WebTeacherNode(Node, Api):
             Path(p["address_file"]).write_text(self.url + "\n")
         self.get_logger().info(f"teach at {self.url}")
         self.app.say(f"{len(library.actions)} teaching goals from {where}; reach tolerance "
-                     f"{p['tolerance']:g}")
+                     f"{reach_tolerance(p):g}")
 
     # --- what the graph says -------------------------------------------------------------
 

@@ -21,10 +21,11 @@ def test_marker_topics_show_the_run_live_and_in_the_bag(ros_processes, ros_domai
 
     from sgim_msgs.msg import Movement
     from sgim_nodes.bag.reader import load_run, read_messages
-    from sgim_nodes.core.teaching import Teacher
+    from sgim_nodes.core.teaching import DEFAULT_TOLERANCE_NOISE, Teacher
     from sgim_nodes.view.picture import PROCESS_COLOURS
     from sgim_ros import qos
     from sim_bridge.data_files import load_teaching_set
+    from sim_bridge.scaling import OUTCOME_NOISE
     from tests.ros.graph_client import GraphClient
 
     client = GraphClient(rclpy_context, "marker_viewer")
@@ -60,7 +61,8 @@ def test_marker_topics_show_the_run_live_and_in_the_bag(ros_processes, ros_domai
 
     # The teaching goals are judged by the automatic teacher's rule on the learner's landings.
     teaching = load_teaching_set()
-    rule = Teacher(teaching.actions, teaching.outcomes, np.random.default_rng(0))
+    rule = Teacher(teaching.actions, teaching.outcomes, np.random.default_rng(0),
+                   tolerance=DEFAULT_TOLERANCE_NOISE * OUTCOME_NOISE)  # the teacher node's
     unreached = set(rule.unreached(np.array([m.outcome for m in landed])).tolist())
     spheres = [m for m in seen["teaching_goals"][-1].markers if m.type == Marker.SPHERE_LIST]
     (goals,) = spheres

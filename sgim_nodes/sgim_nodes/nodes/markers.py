@@ -11,7 +11,7 @@ publishes, at most ``rate`` times a second and only what changed (view/markers.p
 all in the frame ``outcome_space`` (set it as the fixed frame in rviz2; Foxglove picks it).
 The recorder records them (bag.types.VIEW_TOPICS), so a replay shows the same picture.
 
-Parameters: rate, full_every, tolerance, teaching_set.
+Parameters: rate, full_every, tolerance_noise, outcome_noise, teaching_set.
 """
 
 from __future__ import annotations
@@ -21,12 +21,12 @@ from rclpy.node import Node
 from visualization_msgs.msg import MarkerArray
 
 from sgim_nodes.core.teaching import Teacher
-from sgim_nodes.nodes.picture_feed import follow
+from sgim_nodes.nodes.picture_feed import REACH_PARAMS, follow, reach_tolerance
 from sgim_nodes.view import markers
 from sgim_nodes.view.picture import LivePicture
 from sgim_ros import qos
 from sgim_ros.entry import run_node
-from sgim_ros.params import Param, declare, non_negative, positive
+from sgim_ros.params import Param, declare, positive
 from sim_bridge.data_files import load_teaching_set
 
 PARAMS = (
@@ -34,8 +34,7 @@ PARAMS = (
           lambda v: 0 < v <= 50, "in (0, 50]"),
     Param("full_every", 5.0, "seconds between full landings refreshes (between them only new "
           "landings are sent)", positive, "> 0"),
-    Param("tolerance", 0.05, "distance under which a teaching goal counts as reached (the "
-          "automatic teacher's)", non_negative, ">= 0"),
+    *REACH_PARAMS,
     Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one"),
 )
 
@@ -46,7 +45,7 @@ class MarkersNode(Node):
         p = declare(self, PARAMS)
         ts = load_teaching_set(p["teaching_set"] or None)
         teacher = Teacher(ts.actions, ts.outcomes, np.random.default_rng(0),
-                          tolerance=p["tolerance"])
+                          tolerance=reach_tolerance(p))
         self.picture = LivePicture(teacher)
         follow(self, self.picture)
         self.full_every = p["full_every"]

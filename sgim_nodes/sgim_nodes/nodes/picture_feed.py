@@ -20,8 +20,27 @@ from sgim_msgs.msg import (
     RegionMap,
     RunStatus,
 )
+from sgim_nodes.core.teaching import DEFAULT_TOLERANCE_NOISE
 from sgim_nodes.view.picture import DemonstrationSeen, Leaf, LivePicture
 from sgim_ros import qos
+from sgim_ros.params import Param, non_negative, positive
+from sim_bridge.scaling import OUTCOME_NOISE
+
+# "Reached" as the automatic teacher judges it (teacher_node.py): within tolerance_noise x
+# outcome_noise of a landing. Every viewer and human teacher takes the same two parameters,
+# which a run's parameter file gives every node, so they all agree with the automatic teacher.
+REACH_PARAMS = (
+    Param("tolerance_noise", DEFAULT_TOLERANCE_NOISE, "a teaching goal counts as reached "
+          "within this many units of the world's outcome noise (the automatic teacher's)",
+          non_negative, ">= 0"),
+    Param("outcome_noise", OUTCOME_NOISE, "the world's outcome noise (outcome units)",
+          positive, "> 0"),
+)
+
+
+def reach_tolerance(values: dict) -> float:
+    """The distance under which a teaching goal counts as reached, from REACH_PARAMS."""
+    return float(values["tolerance_noise"] * values["outcome_noise"])
 
 RUN_STATES = {RunStatus.STATE_RUNNING: "running", RunStatus.STATE_FINISHED: "finished",
               RunStatus.STATE_ABORTED: "aborted"}
