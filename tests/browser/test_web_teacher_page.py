@@ -63,9 +63,16 @@ def message(page) -> str:
 
 
 def wait_for_message(page, pattern: str, timeout: float = 30.0) -> str:
-    page.wait_for_function(
-        "p => new RegExp(p).test(document.querySelector('#message').textContent)",
-        arg=pattern, timeout=timeout * 1000)
+    from playwright.sync_api import TimeoutError as PageTimeout
+
+    try:
+        page.wait_for_function(
+            "p => new RegExp(p).test(document.querySelector('#message').textContent)",
+            arg=pattern, timeout=timeout * 1000)
+    except PageTimeout:
+        log = page.locator("#log").inner_text()
+        pytest.fail(f"no message {pattern!r} in {timeout:g} s; the page says "
+                    f"{message(page)!r}; its log:\n{log}")
     return message(page)
 
 
@@ -117,6 +124,9 @@ def test_teach_a_run_from_the_page(web_run):
     wait_for_turn(page, PERIOD)
     landed = page.evaluate("window.teacherStats.landings")
     assert 20 < landed <= PERIOD
+    # Pause at the turn, so that the run stands still after the demonstration.
+    page.click("#pause")
+    wait_for_message(page, f"pausing at movement {PERIOD}")
     # Click an unreached (red) teaching goal on the picture.
     reached = page.evaluate("window.teacherPage.view.teaching.reached")
     unreached = [i for i, r in enumerate(reached) if not r]
@@ -126,13 +136,11 @@ def test_teach_a_run_from_the_page(web_run):
     page.locator("#overlay").click(position={"x": at["x"], "y": at["y"]})
     sent = wait_for_message(page, "sent demonstration 1")
     assert f"teaching-set entry {goal}" in sent
-    # The demonstration ended the turn: pause while its cast is drawn, then resume.
-    page.click("#pause")
-    wait_for_message(page, "pausing at movement|already paused")
+    # The demonstration ended the turn, the pause holds the run: its cast is drawn meanwhile.
     page.wait_for_function("document.querySelector('#pace-state').textContent === 'paused'",
                            timeout=60_000)
     paused_at = int(page.locator("#count").inner_text())
-    assert paused_at >= PERIOD
+    assert paused_at == PERIOD
     page.wait_for_function("!document.querySelector('#cast').classList.contains('hidden') && "
                            "document.querySelector('#cast').naturalWidth > 0", timeout=300_000)
     assert f"demonstration 1: teaching-set entry {goal}" in page.locator(
@@ -144,7 +152,7 @@ def test_teach_a_run_from_the_page(web_run):
     assert child.returncode == 0, output[-3000:]
     assert "teach at http://127.0.0.1:" in output
     # The page knows the run is over and says so when asked for another demonstration.
-    page.wait_for_function("document.querySelector('#run-state').textContent === 'finished'",
+    page.wait_for_function("document.querySelector('#run-state').textContent.startsWith('finished')",
                            timeout=30_000)
     page.locator("#overlay").click(position={"x": at["x"], "y": at["y"]})
     assert "the run is over (finished)" in wait_for_message(page, "the run is over")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import http.client
 import json
 import urllib.error
 import urllib.request
@@ -138,6 +139,15 @@ def test_the_server_refuses_what_a_foreign_page_could_send():
         assert status == 400 and b"not JSON" in body
         status, body = _request(f"{base}/api/command", command, {**token, "X-Teacher": "1"})
         assert status == 200 and json.loads(body)["echo"]["what"] == "pause"
+        # On one kept-alive connection a refused command leaves nothing behind for the next.
+        connection = http.client.HTTPConnection("127.0.0.1", server.port, timeout=10)
+        for headers, expected in (({}, 403), ({"X-Teacher": "1"}, 200)):
+            connection.request("POST", "/api/command", command, {**token, **headers})
+            reply = connection.getresponse()
+            assert reply.status == expected
+            assert reply.getheader("Content-Type") == "application/json"
+            reply.read()
+        connection.close()
         assert _request(f"{base}/cast.gif", headers=token)[0] == 404
     finally:
         server.stop()

@@ -179,6 +179,18 @@ class Handler(BaseHTTPRequestHandler):
             pass
 
     def do_POST(self) -> None:
+        # Read the body first, whatever the answer: on a kept-alive connection, unread bytes
+        # would be taken for the next request (a refused command broke the page's next one).
+        try:
+            length = int(self.headers.get("Content-Length") or 0)
+        except ValueError:
+            length = -1
+        if not 0 < length <= MAX_BODY:
+            self.close_connection = True
+            self._send_json({"ok": False, "message": f"a command is 1 to {MAX_BODY} bytes"},
+                            HTTPStatus.BAD_REQUEST)
+            return
+        raw = self.rfile.read(length)
         if not self._allowed():
             return
         if urlsplit(self.path).path != "/api/command":
@@ -189,13 +201,8 @@ class Handler(BaseHTTPRequestHandler):
             self._send_json({"ok": False, "message": "commands need the X-Teacher: 1 header"},
                             HTTPStatus.FORBIDDEN)
             return
-        length = int(self.headers.get("Content-Length") or 0)
-        if not 0 < length <= MAX_BODY:
-            self._send_json({"ok": False, "message": f"a command is 1 to {MAX_BODY} bytes"},
-                            HTTPStatus.BAD_REQUEST)
-            return
         try:
-            body = json.loads(self.rfile.read(length))
+            body = json.loads(raw)
         except (json.JSONDecodeError, UnicodeDecodeError) as error:
             self._send_json({"ok": False, "message": f"the command is not JSON: {error}"},
                             HTTPStatus.BAD_REQUEST)

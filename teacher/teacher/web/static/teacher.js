@@ -255,8 +255,10 @@
       if (ms > 50) stats.slow += 1;  // a frame a person would notice
       setTimeout(poll, POLL_MS);
     } catch (error) {
-      stats.failures += 1;
-      say(`the web teacher does not answer (${error.message}): the run may be over`, false);
+      stats.failures += 1;  // the badge says it; the message line keeps the last command's answer
+      setText("run-state", view.over ? `${view.runState}: the web teacher has stopped`
+                                     : `the web teacher does not answer (${error.message})`);
+      setClass("run-state", "badge over");
       setTimeout(poll, 1000);
     }
   }
