@@ -166,7 +166,7 @@ class HumanInputNode(Node):
                         f"{state.movement_count}{error}: bye")
             self.finished = True
             return
-        if "not taken" in msg.message:
+        if " refused: " in msg.message:  # the arbiter did not take a demonstration
             self.notify(f"warning: {msg.message}")
         decile = 10 * state.movement_count // max(1, state.total)
         if decile > self._decile:

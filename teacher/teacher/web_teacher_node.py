@@ -150,7 +150,7 @@ class WebTeacherNode(Node, Api):
             elif msg.state == RunStatus.STATE_ABORTED:
                 learner.run_over = f"aborted: {msg.message}"
         if msg.message and msg.message not in ("started", ""):
-            level = ("warning" if "not taken" in msg.message
+            level = ("warning" if " refused: " in msg.message
                      or msg.state == RunStatus.STATE_ABORTED else "info")
             self.app.say(f"run: {msg.message}", level)
 

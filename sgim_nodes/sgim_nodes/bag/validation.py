@@ -41,7 +41,7 @@ LEARNER_PROCESSES = frozenset(PROCESS_CODES[p] for p in
 RECORDED_STATUSES = frozenset({Status.OK, Status.NO_CONTACT, Status.PHYSICS_FAILURE})
 GOAL_MODES = frozenset({1, 2, 3, 4})
 RUN_STATES = frozenset({0, 1, 2})
-SOURCES = frozenset({"automatic", "human"})
+SOURCES = frozenset({"automatic", "human", "web"})  # teacher, human_input, web_teacher
 MAX_ATTEMPT = 255  # Movement.attempt is a uint8
 LIMITS_KEY = "sgim_validation_limits"  # the recorder's limits, in a bag's custom_data
 
