@@ -213,7 +213,10 @@ def report(results: list[dict], floors: dict[str, float], movements: int,
             shares = np.nanmean(np.array([p["mode1_unreachable_share"] for p in probes]), 0)
             print(f"  {lr:14s} goals {avg('n_goals'):.0f}, explore {avg('explore_share'):.2f}, "
                   f"gain on memory {avg('gain_mean'):+.4f} (positive in "
-                  f"{avg('gain_positive_share'):.2f}), start {avg('start_distance_mean'):.4f} "
+                  f"{avg('gain_positive_share'):.2f}; goals in reachable space "
+                  f"{avg('gain_reachable_mean'):+.4f}, elsewhere "
+                  f"{avg('gain_unreachable_mean'):+.4f}; no outcome at all "
+                  f"{avg('no_outcome_share'):.2f}), start {avg('start_distance_mean'):.4f} "
                   f"-> best {avg('best_distance_mean'):.4f}; interest real "
                   f"{avg('interest_real'):.4f} vs shuffled {avg('interest_shuffled'):.4f}")
             print(f"  {'':14s} mode-1 goals in never-reachable space per {FRAME}: "

@@ -58,20 +58,30 @@ class Probe:
         learner._record_competence = record  # type: ignore[method-assign]
 
     def summary(self, frame: int, total: int, unreachable: ReachMap | None) -> dict:
+        """Gain on memory is start distance - best distance of the goal-directed attempts that
+        landed at least once (those with every movement failed are counted apart), over all of
+        them and over those whose goal lies in reachable space."""
         goal_attempts = [a for a in self.attempts if a.mode != 4]
-        exploit = [a for a in goal_attempts if not a.explore and np.isfinite(a.start_distance)]
-        gains = np.array([a.start_distance - a.best_distance for a in exploit])
+        directed = [a for a in goal_attempts if not a.explore and np.isfinite(a.start_distance)]
+        landed = [a for a in directed if np.isfinite(a.best_distance)]
+        gains = np.array([a.start_distance - a.best_distance for a in landed])
+
+        def mean(values: list[float] | np.ndarray) -> float:
+            return float(np.mean(values)) if len(values) else float("nan")
+
         out: dict = {
             "n_goals": len(goal_attempts),
-            "explore_share": float(np.mean([a.explore for a in goal_attempts]))
-            if goal_attempts else float("nan"),
-            "gain_mean": float(gains.mean()) if len(gains) else float("nan"),
-            "gain_positive_share": float((gains > 0).mean()) if len(gains) else float("nan"),
-            "start_distance_mean": float(np.mean([a.start_distance for a in exploit]))
-            if exploit else float("nan"),
-            "best_distance_mean": float(np.mean([a.best_distance for a in exploit]))
-            if exploit else float("nan"),
+            "explore_share": mean([a.explore for a in goal_attempts]),
+            "gain_mean": mean(gains),
+            "gain_positive_share": mean(gains > 0),
+            "no_outcome_share": 1.0 - len(landed) / len(directed) if directed else float("nan"),
+            "start_distance_mean": mean([a.start_distance for a in landed]),
+            "best_distance_mean": mean([a.best_distance for a in landed]),
         }
+        if unreachable is not None and landed:
+            reach = np.array([unreachable.share(a.goal[None]) == 0.0 for a in landed])
+            out["gain_reachable_mean"] = mean(gains[reach])
+            out["gain_unreachable_mean"] = mean(gains[~reach])
         real, shuffled, corr = interest_against_shuffled(self.learner)
         out.update(interest_real=real, interest_shuffled=shuffled, interest_corr=corr)
         if unreachable is not None:
