@@ -221,11 +221,22 @@ class FishingWorld:
         return start, middle, end, dur
 
     def _reset_pose(self, q0: np.ndarray) -> None:
-        """Arm at the start posture, rod straight, line hanging straight down, all at rest."""
+        """Arm at the start posture, rod straight, line hanging straight down, all at rest.
+
+        Also arms the servos' speed limit: ``maxVelocity`` (the motor's rhs clamp) is kept by the
+        motor until changed, and only the single-joint call sets it, so it is set here once per
+        cast and the per-step array call (which cannot set it) keeps it: one call per step
+        instead of six, bit-identical (a test compares with the per-joint calls).
+        """
         c, b = self._client, self.body
         pb.restoreState(self._state, physicsClientId=c)
-        for j, q in zip(self.arm_joints, q0, strict=True):
+        kp = self.time_step / MOTOR_TAU
+        for j, q, force, vmax in zip(self.arm_joints, q0, self.efforts, self.max_velocities,
+                                     strict=True):
             pb.resetJointState(b, j, float(q), 0.0, physicsClientId=c)
+            pb.setJointMotorControl2(b, j, pb.POSITION_CONTROL, targetPosition=float(q),
+                                     targetVelocity=0.0, force=force, positionGain=kp,
+                                     velocityGain=1.0, maxVelocity=vmax, physicsClientId=c)
         tip = pb.getLinkState(b, self.rod_tip_link, computeForwardKinematics=1,
                               physicsClientId=c)
         tip_orn_inv = pb.invertTransform([0, 0, 0], tip[5])[1]
@@ -248,27 +259,24 @@ class FishingWorld:
         times = np.arange(1, n_steps + 1) * dt  # target at the end of each step
         q_ref, dq_ref = joint_trajectory(start, middle, end, dur, times)
         q_ref, dq_ref = q_ref.tolist(), dq_ref.tolist()
-        arm, rod, hook = self.arm_joints, self.rod_joints, self.hook_link
-        k, efforts, vmax = self._k, self.efforts, self.max_velocities
-        kp, n_arm, set_motor = self.time_step / MOTOR_TAU, len(arm), pb.setJointMotorControl2
-        z_prev = pb.getLinkState(b, hook, physicsClientId=c)[4]
+        arm, rod, hook, k = self.arm_joints, self.rod_joints, self.hook_link, self._k
+        kp = self.time_step / MOTOR_TAU
+        efforts, gains_p, gains_v = list(self.efforts), [kp] * len(arm), [1.0] * len(arm)
+        z_prev = pb.getLinkState(b, hook, 0, 0, c)[4]
         if z_prev[2] <= WATER_Z:
             return CastResult(status=Status.PHYSICS_FAILURE, message="hook starts under water")
-        set_motors, get_states, step = (pb.setJointMotorControlArray, pb.getJointStates,
-                                        pb.stepSimulation)
-        get_link = pb.getLinkState
+        # Per step: 5 pybullet calls (positional arguments: no keyword parsing), all the work.
+        set_motors, get_states, step, get_link = (pb.setJointMotorControlArray,
+                                                  pb.getJointStates, pb.stepSimulation,
+                                                  pb.getLinkState)
         position, torque = pb.POSITION_CONTROL, pb.TORQUE_CONTROL
         for i in range(n_steps):
-            qi, dqi = q_ref[i], dq_ref[i]
-            for j in range(n_arm):
-                set_motor(b, arm[j], position, targetPosition=qi[j], targetVelocity=dqi[j],
-                          force=efforts[j], positionGain=kp, velocityGain=1.0,
-                          maxVelocity=vmax[j], physicsClientId=c)
-            states = get_states(b, rod, physicsClientId=c)
+            set_motors(b, arm, position, q_ref[i], dq_ref[i], efforts, gains_p, gains_v, c)
+            states = get_states(b, rod, c)
             tau = [-ki * s[0] for ki, s in zip(k, states, strict=True)]
             set_motors(b, rod, torque, forces=tau, physicsClientId=c)
-            step(physicsClientId=c)
-            p = get_link(b, hook, physicsClientId=c)[4]
+            step(c)
+            p = get_link(b, hook, 0, 0, c)[4]
             if not abs(p[2]) < 1e3:
                 return CastResult(status=Status.PHYSICS_FAILURE, message="state exploded")
             if p[2] <= WATER_Z:
@@ -292,7 +300,7 @@ class FishingWorld:
 
     def _landed(self, xy: np.ndarray, t_touch: float, t_rel: float) -> CastResult:
         u = scaling.world_to_outcome(xy)
-        if not self.lake.is_water(xy):
+        if self.lake.body_at(float(xy[0]), float(xy[1])) == lake_mod.LAND:
             return CastResult(status=Status.NO_CONTACT, world_point=xy, touchdown=u,
                               touch_time=t_touch,
                               release_time=t_rel,

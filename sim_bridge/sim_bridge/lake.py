@@ -41,6 +41,7 @@ ARMS: dict[str, np.ndarray] = {
     "south": np.array([(1.2, -2.5), (2.0, -5.5), (1.9, -8.5), (2.9, -8.5), (3.0, -5.5),
                        (2.6, -2.5)]),
 }
+_ARM_TUPLES = tuple(tuple((float(px), float(py)) for px, py in poly) for poly in ARMS.values())
 # The isolated pond: a disc (centre x, centre y, radius), metres.
 POND = (-4.25, -2.125, 0.95)
 
@@ -71,6 +72,19 @@ def _in_main_lake(xy: np.ndarray) -> np.ndarray:
     for poly in ARMS.values():
         main |= _in_polygon(xy, poly)
     return main
+
+
+def _point_in_polygon(x: float, y: float, poly: tuple[tuple[float, float], ...]) -> bool:
+    """``_in_polygon`` for one point in plain floats: the same operations in the same order (so
+    the same answer, bit for bit, a test checks it), without numpy's per-call overhead."""
+    inside = False
+    x1, y1 = poly[-1]
+    for x2, y2 in poly:
+        # edge from (x1, y1) to (x2, y2), as np.roll(poly, -1) pairs them
+        if (y1 > y) != (y2 > y) and x < x1 + (y - y1) * (x2 - x1) / (y2 - y1):
+            inside = not inside
+        x1, y1 = x2, y2
+    return inside
 
 
 def water_bounding_box() -> np.ndarray:
@@ -128,6 +142,19 @@ class Lake:
     def is_water(self, xy: np.ndarray) -> np.ndarray:
         """True where world points (..., 2) lie on water."""
         return self.water_body(xy) != LAND
+
+    def body_at(self, x: float, y: float) -> int:
+        """``water_body`` of one point (metres), in plain floats: the world asks it once per cast,
+        where numpy's per-call overhead cost 0.24 ms; same answers (tested)."""
+        cx, cy, r = self.pond
+        if (x - cx) ** 2 + (y - cy) ** 2 <= r * r:
+            return ISOLATED_POND
+        bx, by, a, b = BASIN
+        if ((x - bx) / a) ** 2 + ((y - by) / b) ** 2 <= 1.0:
+            return MAIN_LAKE
+        if any(_point_in_polygon(x, y, poly) for poly in _ARM_TUPLES):
+            return MAIN_LAKE
+        return LAND
 
     def isolated_centre_radius(self) -> tuple[np.ndarray, float]:
         """The pond in normalised outcome units: centre (2,) and radius."""

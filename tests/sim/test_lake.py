@@ -39,3 +39,16 @@ def test_water_shapes() -> None:
     assert lake.water_body(pts).tolist() == expected
     assert lake.is_water(np.array([0.0, 0.0]))  # a single point works too
     assert lake.water_body(pts.reshape(11, 1, 2)).shape == (11, 1)
+
+
+def test_scalar_point_test_agrees_with_the_vectorised_one() -> None:
+    """``Lake.body_at`` (one point, plain floats, used once per cast) gives ``water_body``'s
+    answer everywhere: random points, the shapes' vertices and points just off them."""
+    rng = np.random.default_rng(7)
+    verts = np.vstack(list(lake.ARMS.values()))
+    cx, cy, r = lake.POND
+    pts = np.vstack([rng.uniform(-9.0, 9.0, (20000, 2)), verts, verts + np.array([0.0, 1e-12]),
+                     verts - np.array([1e-9, 0.0]), [[cx + r, cy], [cx, cy - r]]])
+    for lk in (lake.DEFAULT_LAKE, lake.Lake(pond_radius=0.3)):
+        scalar = [lk.body_at(float(x), float(y)) for x, y in pts]
+        assert scalar == lk.water_body(pts).tolist()
