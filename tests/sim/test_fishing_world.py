@@ -233,3 +233,43 @@ def test_one_array_servo_call_equals_six_single_calls() -> None:
                                           physicsClientId=fast._client)[6])
             assert vf.tobytes() == v.tobytes()
     assert compared >= 3
+
+
+def test_constraint_solver_is_converged(actions: np.ndarray) -> None:
+    """The servos' and the rod friction's constraints are solved to convergence: six times more
+    solver sweeps move no touch-down by more than 0.002 (README_world.md: at most 0.0006 over
+    300 casts)."""
+    import pybullet as pb
+
+    with FishingWorld(seed=0, noise=0.0) as w, FishingWorld(seed=0, noise=0.0) as fine:
+        pb.setPhysicsEngineParameter(numSolverIterations=300, physicsClientId=fine._client)
+        d = np.linalg.norm(touch_downs(w, actions) - touch_downs(fine, actions), axis=1)
+    assert np.isfinite(d).sum() >= 6
+    assert np.nanmax(d) < 0.002
+
+
+def test_building_a_world_prints_nothing(capfd: pytest.CaptureFixture[str]) -> None:
+    """pybullet announces a solver switch on C's stdout; the world silences it (ROS logs)."""
+    import ctypes
+
+    capfd.readouterr()
+    with FishingWorld(seed=0) as w:
+        assert w.execute(np.zeros(24)).status in (Status.OK, Status.NO_CONTACT)
+    ctypes.CDLL(None).fflush(None)  # C's stdout is buffered: what was written shows up now
+    out = capfd.readouterr().out
+    assert "solver" not in out.lower()
+
+
+def test_a_cast_leaves_the_garbage_collector_as_it_found_it() -> None:
+    import gc
+
+    with FishingWorld(seed=0) as w:
+        assert gc.isenabled()
+        w.execute(np.zeros(24))
+        assert gc.isenabled()
+        gc.disable()
+        try:
+            w.execute(np.zeros(24))
+            assert not gc.isenabled()
+        finally:
+            gc.enable()
