@@ -171,13 +171,12 @@ class FishingWorld:
             raise ValueError("noise must be a finite number >= 0")
         if not 0.0 < time_step <= 0.01:
             raise ValueError("time_step must be in (0, 0.01] s: coarser steps are inaccurate")
-        self.seed = int(seed)
         self.noise = float(noise)
         self.time_step = float(time_step)
         # The water's shapes; the default keeps the documented world (README_world.md). Only
         # the test "water or land" depends on it, never the physics.
         self.lake = lake if lake is not None else lake_mod.DEFAULT_LAKE
-        self.rng = np.random.Generator(np.random.PCG64(self.seed))
+        self.reseed(seed)
         self._client = pb.connect(pb.DIRECT)
         self._build(rod or RodSpec())
 
@@ -230,6 +229,16 @@ class FishingWorld:
         # The water is the plane z = WATER_Z, tested against the hook: no body, no collision.
         # Rotation that points the line straight down (used to hang it at rest before a cast).
         self._rest_down = pb.getQuaternionFromEuler([math.pi, 0.0, 0.0])
+
+    def reseed(self, seed: int) -> None:
+        """Restart the noise stream as if the world had been built with ``seed``.
+
+        Why: a tool that needs independent noise per item (the floor's goals, the teaching
+        set's cells) reseeds one world instead of building one per item (a URDF load each), and
+        any single item can then be recomputed alone.
+        """
+        self.seed = int(seed)
+        self.rng = np.random.Generator(np.random.PCG64(self.seed))
 
     def close(self) -> None:
         """Disconnect the physics client (idempotent)."""

@@ -273,3 +273,12 @@ def test_a_cast_leaves_the_garbage_collector_as_it_found_it() -> None:
             assert not gc.isenabled()
         finally:
             gc.enable()
+
+
+def test_reseed_restarts_the_noise_stream(actions: np.ndarray) -> None:
+    with FishingWorld(seed=5) as fresh, FishingWorld(seed=9) as w:
+        first = outcomes(fresh, actions[:3])
+        outcomes(w, actions[:2])  # some casts with another stream
+        w.reseed(5)
+        assert w.seed == 5
+        assert outcomes(w, actions[:3]).tobytes() == first.tobytes()
