@@ -17,6 +17,9 @@ An error is the distance from the goal to where the hook came down, on water or 
 evaluator's rule); a cast that never comes down counts as the diagonal of [-1, 1]^2.
 
     python -m sim_bridge.tools.make_floor --seed 0
+
+``--png-only`` redraws the figure (goals coloured by their floor, the teaching set, the shore)
+and prints the summary from the stored files, without casting.
 """
 
 from __future__ import annotations
@@ -27,7 +30,12 @@ import math
 import numpy as np
 from tqdm import tqdm
 
-from sim_bridge.data_files import load_benchmark_goals, load_reachable_casts
+from sim_bridge.data_files import (
+    load_benchmark_goals,
+    load_floor,
+    load_reachable_casts,
+    load_teaching_set,
+)
 from sim_bridge.fishing_world import FishingWorld
 from sim_bridge.scaling import world_to_outcome
 
@@ -86,6 +94,51 @@ def floor(goals: np.ndarray, actions: np.ndarray, outcomes: np.ndarray, k: int,
             "neighbour_distance": np.linalg.norm(outcomes[near[rows, 0]] - goals[rows], axis=1)}
 
 
+def summary(path: str | None = None) -> str:
+    """The stored floor's figures: overall, main lake and isolated region."""
+    from sim_bridge.lake import in_isolated_region
+    f = load_floor(path)
+    iso = in_isolated_region(f.goals)
+    rows = [f"floor of {len(f.goals)} goals: best of {f.k} nearest (chosen on {f.choose_casts} "
+            f"casts, scored on {f.score_casts} others) mean {f.mean:.4f} (median "
+            f"{np.median(f.per_goal):.4f}); nearest landing's action mean {f.nearest_mean:.4f} "
+            f"(median {np.median(f.nearest):.4f})"]
+    for name, sel in (("main lake", ~iso), ("isolated region", iso)):
+        rows.append(f"  {name}: {int(sel.sum())} goals, floor mean {f.per_goal[sel].mean():.4f},"
+                    f" nearest mean {f.nearest[sel].mean():.4f}")
+    return "\n".join(rows)
+
+
+def save_png(path: str, floor_path: str | None = None, goals_path: str | None = None) -> None:
+    """Benchmark goals coloured by their floor, the teaching set's outcomes, the shoreline."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from sim_bridge.lake import ISOLATED_REGION, draw_shoreline
+    floor, goals, teach = load_floor(floor_path), load_benchmark_goals(goals_path), \
+        load_teaching_set()
+    fig, ax = plt.subplots(figsize=(6.4, 5.6))
+    draw_shoreline(ax)
+    sc = ax.scatter(goals[:, 0], goals[:, 1], c=floor.per_goal, s=22, cmap="viridis",
+                    vmin=0.0, vmax=float(np.percentile(floor.per_goal, 95)), zorder=3,
+                    label=f"{len(goals)} benchmark goals")
+    fig.colorbar(sc, ax=ax, label="floor: error of the best mapped action, cast with noise")
+    ax.scatter(teach.outcomes[:, 0], teach.outcomes[:, 1], marker="*", s=90, color="tab:red",
+               edgecolor="black", linewidth=0.5, zorder=4,
+               label=f"{len(teach.outcomes)} demonstrations")
+    ax.add_patch(plt.Circle(ISOLATED_REGION["centre"], ISOLATED_REGION["radius"], fill=False,
+                            ls="--", color="tab:orange", lw=1.4, zorder=2))
+    ax.set(xlim=(-1, 1), ylim=(-1, 1), aspect="equal", xlabel="outcome x (normalised)",
+           ylabel="outcome y (normalised)",
+           title=f"Benchmark floor: mean {floor.mean:.3f} (nearest landing alone "
+                 f"{floor.nearest_mean:.3f});\ndashed: the isolated region")
+    ax.legend(loc="upper right", fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -98,9 +151,16 @@ def main(argv: list[str] | None = None) -> None:
                         help="noisy casts that score the nearest and the chosen action")
     parser.add_argument("--seed", type=int, default=0, help="seed of the casts' noise")
     parser.add_argument("--output", default="sim_bridge/data/benchmark_floor.npz")
+    parser.add_argument("--png", default="docs/figures/sim_benchmark_floor.png")
+    parser.add_argument("--png-only", action="store_true",
+                        help="only redraw --png from the stored files (no casting)")
     args = parser.parse_args(argv)
     if min(args.k, args.choose_casts, args.score_casts) < 1:
         parser.error("--k, --choose-casts and --score-casts must be >= 1")
+    if args.png_only:
+        save_png(args.png, args.output, args.goals)
+        print(f"{summary(args.output)}\nfigure -> {args.png}")
+        return
     goals = load_benchmark_goals(args.goals)
     casts = load_reachable_casts(args.reachable)
     f = floor(goals, casts.actions, casts.outcomes, args.k, args.choose_casts,
@@ -110,11 +170,10 @@ def main(argv: list[str] | None = None) -> None:
                         neighbour_distance=f["neighbour_distance"], k=args.k,
                         choose_casts=args.choose_casts, score_casts=args.score_casts,
                         seed=args.seed, map_size=len(casts.outcomes))
-    print(f"floor of {len(goals)} goals -> {args.output}: best of {args.k} nearest (chosen on "
-          f"{args.choose_casts} casts, scored on {args.score_casts} others) mean "
-          f"{f['best'].mean():.4f} (median {np.median(f['best']):.4f}); nearest landing's "
-          f"action mean {f['nearest'].mean():.4f} (median {np.median(f['nearest']):.4f}); "
-          f"nearest mapped landing {f['neighbour_distance'].mean():.4f} from a goal on average")
+    save_png(args.png, args.output, args.goals)
+    print(f"{summary(args.output)}\n  nearest mapped landing "
+          f"{f['neighbour_distance'].mean():.4f} from a goal on average\n-> {args.output}, "
+          f"{args.png}")
 
 
 if __name__ == "__main__":
