@@ -237,15 +237,15 @@ def test_one_array_servo_call_equals_six_single_calls() -> None:
 
 def test_constraint_solver_is_converged(actions: np.ndarray) -> None:
     """The servos' and the rod friction's constraints are solved to convergence: six times more
-    solver sweeps move no touch-down by more than 0.002 (README_world.md: at most 0.0006 over
-    300 casts)."""
+    solver sweeps move no touch-down by more than 0.005 (README_world.md: at most 0.0028 over
+    100 casts; the previous solver: up to 0.108)."""
     import pybullet as pb
 
     with FishingWorld(seed=0, noise=0.0) as w, FishingWorld(seed=0, noise=0.0) as fine:
         pb.setPhysicsEngineParameter(numSolverIterations=300, physicsClientId=fine._client)
         d = np.linalg.norm(touch_downs(w, actions) - touch_downs(fine, actions), axis=1)
     assert np.isfinite(d).sum() >= 6
-    assert np.nanmax(d) < 0.002
+    assert np.nanmax(d) < 0.005
 
 
 def test_building_a_world_prints_nothing(capfd: pytest.CaptureFixture[str]) -> None:
