@@ -41,11 +41,14 @@ FRAME_FRACTIONS = (0.2, 0.5, 1.0)  # the paper's 1000, 2500 and 5000 of 5000 mov
 DESCRIPTION = f"""\
 Analyse a study (one folder per run: <learner>-seed<N>/ with bag/ and metadata.yaml) from its
 bags alone, and write:
-  error_curves.png  mean error on the benchmark goals per learner, 95 % band over seeds
+  error_curves.png  mean error on the benchmark goals per learner, 95 % band over seeds,
+                    the floor dashed
   landings.png      where the hook landed: rows learners, columns movements 1..T
   region_tree.png   interest-coloured leaf regions of sgim-d and saggriac at the same times
-  results.md        final errors (mean and 95 % interval), pairwise tests (Welch's t and
-                    Mann-Whitney U), isolated-region coverage, runs and durations
+  results.md        final errors (mean and 95 % interval, and how far above the benchmark's
+                    floor: what a lookup on a dense map of the world achieves), pairwise
+                    tests (Welch's t and Mann-Whitney U), isolated-region coverage, runs and
+                    durations
   results.json      the same numbers
 Each run is read once, every segment of it (bag/, bag.resume1/, ...), its records validated
 as every reader validates them; its columns are cached as <run>/{CACHE_NAME} (rebuilt when a
