@@ -1,8 +1,14 @@
 """Casts per second of the fishing world, in-process on one core, with an optional profile.
 
-Why: four learners x ten seeds x 5000 movements must run on a laptop; the target is >= 50 casts/s.
+Why: the study (five learners x ten seeds x 5000 movements) must run in minutes on 2 cores; the
+target is >= 150 casts/s (issue 11). Wall-clock casts/s is the figure; the CPU time of this
+process is printed beside it because, on a machine shared with other jobs, the wall clock also
+counts the time this process waited for a core (compare the two to see how loaded the machine
+was). ``--repeat N`` runs the same casts N times and prints each and the best.
+``--accuracy N`` also casts N random actions without noise in this world and in one whose
+constraint solver runs 300 sweeps (converged), and prints how far the touch-downs differ.
 
-    .venv/bin/python benchmarks/bench_sim_speed.py --casts 500 [--profile]
+    PYTHONPATH=sim_bridge .venv/bin/python benchmarks/bench_sim_speed.py --casts 500 [--profile]
 """
 
 from __future__ import annotations
@@ -22,24 +28,57 @@ def main(argv: list[str] | None = None) -> None:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--casts", type=int, default=500)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--repeat", type=int, default=1, help="timed rounds (best is printed)")
     parser.add_argument("--profile", action="store_true", help="print the top cProfile entries")
+    parser.add_argument("--accuracy", type=int, default=0,
+                        help="casts compared with a converged solver (0: skip)")
     args = parser.parse_args(argv)
+    if args.casts < 1 or args.repeat < 1:
+        parser.error("--casts and --repeat must be >= 1")
     world = FishingWorld(seed=args.seed)
     acts = np.random.default_rng(args.seed).uniform(-1, 1, (args.casts, world.action_dim))
     world.execute(acts[0])  # warm-up
     prof = cProfile.Profile() if args.profile else None
-    t0 = time.perf_counter()
+    best = (0.0, 0.0)
+    for _ in range(args.repeat):
+        t0, c0 = time.perf_counter(), time.process_time()
+        if prof:
+            prof.enable()
+        for a in acts:
+            world.execute(a)
+        if prof:
+            prof.disable()
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        best = max(best, (args.casts / wall, args.casts / cpu))
+        print(f"{args.casts / wall:.1f} casts/s, {1000 * wall / args.casts:.2f} ms per cast "
+              f"(CPU time of this process: {args.casts / cpu:.1f} casts/s)"
+              f"{' (under the profiler)' if prof else ''}", flush=True)
+    if args.repeat > 1:
+        print(f"best of {args.repeat}: {best[0]:.1f} casts/s (CPU: {best[1]:.1f} casts/s)")
     if prof:
-        prof.enable()
-    for a in acts:
-        world.execute(a)
-    if prof:
-        prof.disable()
-    el = time.perf_counter() - t0
-    print(f"{args.casts / el:.1f} casts/s, {1000 * el / args.casts:.2f} ms per cast"
-          f"{' (under the profiler)' if prof else ''}")
-    if prof:
-        pstats.Stats(prof).sort_stats("tottime").print_stats(8)
+        pstats.Stats(prof).sort_stats("tottime").print_stats(10)
+    if args.accuracy > 0:
+        print(solver_accuracy(args.accuracy, args.seed))
+
+
+def solver_accuracy(n: int, seed: int) -> str:
+    """Touch-down distance (normalised units) between this world and a converged solver."""
+    import pybullet as pb
+
+    from sim_bridge.scaling import world_to_outcome
+
+    acts = np.random.default_rng(seed + 1).uniform(-1, 1, (n, 24))
+    pts = []
+    for sweeps in (None, 300):
+        with FishingWorld(seed=seed, noise=0.0) as w:
+            if sweeps:
+                pb.setPhysicsEngineParameter(numSolverIterations=sweeps, physicsClientId=w._client)
+            pts.append(np.array([world_to_outcome(r.world_point) if r.world_point is not None
+                                 else (np.nan, np.nan) for r in map(w.execute, acts)]))
+    d = np.linalg.norm(pts[0] - pts[1], axis=1)
+    d = d[np.isfinite(d)]
+    return (f"solver vs 300 sweeps ({len(d)} noise-free touch-downs): median {np.median(d):.5f}, "
+            f"p90 {np.percentile(d, 90):.5f}, p99 {np.percentile(d, 99):.4f}, max {d.max():.4f}")
 
 
 if __name__ == "__main__":

@@ -14,7 +14,7 @@ setup(
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
         (f"share/{PACKAGE}/config", glob("config/*.yaml")),
-        # The reachable map, benchmark goals and teaching set (data_files.data_dir finds them).
+        # The reachable map, benchmark goals, teaching set and floor (data_files.data_dir).
         (f"share/{PACKAGE}/data", glob("data/*.npz")),
     ],
     install_requires=["setuptools"],

@@ -1,4 +1,4 @@
-"""Load the world's data files: reachable map, benchmark goals and teaching set.
+"""Load the world's data files: reachable map, benchmark goals, teaching set and floor.
 
 Why a search path: in the source tree the files sit in ``sim_bridge/data`` next to the package;
 installed by colcon they sit in ``<prefix>/share/sim_bridge/data`` (setup.py ``data_files``), and
@@ -7,8 +7,8 @@ relative to this module (or ``SIM_BRIDGE_DATA_DIR``), so no ROS import and no wo
 is needed.
 
 The isolated region (the pond cut off by land, ``lake.py``) is re-exported here so the analysis can
-measure each learner's coverage of it: ``ISOLATED_REGION = {"centre": (-0.5, -0.25), "radius":
-0.112}`` in normalised outcome units, and ``in_isolated_region(outcomes)``. For a world with
+measure each learner's coverage of it: ``ISOLATED_REGION = {"centre": (-0.85, -0.25), "radius":
+0.088}`` in normalised outcome units, and ``in_isolated_region(outcomes)``. For a world with
 another pond (``lake.Lake(pond_radius=...)``), ``isolated_region(lake)`` and
 ``lake.in_isolated_region(outcomes)``; ``load_reachable_casts(..., lake=lake)`` keeps only the
 mapped casts that land on that lake's water (a smaller pond's landings are a subset of the
@@ -26,14 +26,17 @@ import numpy as np
 from sim_bridge import scaling
 from sim_bridge.lake import ISOLATED_REGION, Lake, in_isolated_region, isolated_region
 
-__all__ = ["ISOLATED_REGION", "Lake", "ReachableMap", "TeachingSet", "data_dir",
+__all__ = ["ISOLATED_REGION", "Floor", "Lake", "ReachableMap", "TeachingSet", "data_dir",
            "in_isolated_region", "isolated_region",
-           "load_benchmark_goals", "load_reachable_casts", "load_reachable_map",
+           "load_benchmark_goals", "load_floor", "load_reachable_casts", "load_reachable_map",
            "load_teaching_set"]
 
 REACHABLE_MAP = "reachable_map.npz"
 BENCHMARK_GOALS = "benchmark_goals.npz"
 TEACHING_SET = "teaching_set.npz"
+BENCHMARK_FLOOR = "benchmark_floor.npz"
+# The map stores actions as int16 = round(action * ACTION_SCALE) (half the size of float32).
+ACTION_SCALE = 32767
 
 
 def data_dir() -> Path:
@@ -70,7 +73,7 @@ class TeachingSet:
 class ReachableMap:
     """Every landed cast of the mapping run."""
 
-    actions: np.ndarray  # (N, 24) float32
+    actions: np.ndarray  # (N, 24) float32 (stored as int16, see ACTION_SCALE)
     outcomes: np.ndarray  # (N, 2) float32, normalised
 
 
@@ -89,7 +92,10 @@ def load_reachable_casts(path: str | os.PathLike[str] | None = None,
     there exactly when its outcome lies on that world's water.
     """
     with np.load(_path(REACHABLE_MAP, path)) as f:
-        m = ReachableMap(actions=f["actions"], outcomes=f["outcomes"])
+        actions = f["actions"]
+        if actions.dtype == np.int16:
+            actions = (actions / np.float32(f["action_scale"])).astype(np.float32)
+        m = ReachableMap(actions=actions, outcomes=f["outcomes"])
     if lake is None:
         return m
     keep = lake.is_water(scaling.outcome_to_world(m.outcomes.astype(np.float64)))
@@ -106,3 +112,39 @@ def load_teaching_set(path: str | os.PathLike[str] | None = None) -> TeachingSet
     """The teacher's demonstrations."""
     with np.load(_path(TEACHING_SET, path)) as f:
         return TeachingSet(actions=f["actions"], outcomes=f["outcomes"], spread=f["spread"])
+
+
+@dataclass(frozen=True)
+class Floor:
+    """What a nearest-action lookup on the reachable map achieves on each benchmark goal.
+
+    ``per_goal`` is the floor: of the ``k`` mapped landings nearest the goal, the action with
+    the least error over ``choose_casts`` noisy casts, scored on ``score_casts`` others.
+    ``nearest``: the single nearest landing's action, scored the same way (the simplest lookup).
+    Same goals, same order as ``load_benchmark_goals()`` (``goals`` is kept to check it).
+    Made by ``python -m sim_bridge.tools.make_floor``.
+    """
+
+    goals: np.ndarray  # (N, 2)
+    per_goal: np.ndarray  # (N,)
+    nearest: np.ndarray  # (N,)
+    k: int
+    choose_casts: int
+    score_casts: int
+
+    @property
+    def mean(self) -> float:
+        """The floor of the benchmark: the mean over goals, as a learner's error is."""
+        return float(self.per_goal.mean())
+
+    @property
+    def nearest_mean(self) -> float:
+        return float(self.nearest.mean())
+
+
+def load_floor(path: str | os.PathLike[str] | None = None) -> Floor:
+    """The benchmark's floor (``benchmark_floor.npz``, beside the benchmark goals)."""
+    with np.load(_path(BENCHMARK_FLOOR, path)) as f:
+        return Floor(goals=f["goals"], per_goal=f["per_goal"], nearest=f["nearest"],
+                     k=int(f["k"]), choose_casts=int(f["choose_casts"]),
+                     score_casts=int(f["score_casts"]))

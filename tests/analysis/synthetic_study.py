@@ -11,11 +11,12 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from sim_bridge.lake import ISOLATED_REGION
 from tests.bag.samples import T, region, stamp, write_bag
 
 N_MOVES = 20
 EVAL_POINTS = (0, 10, 20)
-INSIDE = (-0.5, -0.25)  # the isolated region's centre
+INSIDE = tuple(ISOLATED_REGION["centre"])  # the isolated region's centre
 OUTSIDE = (0.3, 0.1)
 
 # Final errors (evaluation at 20) per learner and seed, and the earlier points.

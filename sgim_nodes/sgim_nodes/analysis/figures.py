@@ -54,8 +54,12 @@ def _outcome_axes(ax: plt.Axes) -> None:
     ax.tick_params(labelsize=7)
 
 
-def plot_error_curves(curves: dict[str, Curve], path: Path) -> Path:
+def plot_error_curves(curves: dict[str, Curve], path: Path, floor: float | None = None) -> Path:
+    """``floor``: the benchmark's floor (``analysis.floor``), drawn as a dashed line."""
     fig, ax = plt.subplots(figsize=(8, 5))
+    if floor is not None:
+        ax.axhline(floor, color="black", linestyle="--", linewidth=1,
+                   label=f"floor: map lookup cast with noise ({floor:.3f})")
     for k, (learner, c) in enumerate(curves.items()):
         col = colour(learner, k)
         n = f"{int(c.n.min())}" if c.n.min() == c.n.max() else f"{int(c.n.min())}-{int(c.n.max())}"

@@ -1,16 +1,22 @@
-"""Map the reachable water: random casts, casts spread from the sparsest cells, and a targeted
-search around the casts that reached the isolated pond.
+"""Map the reachable water densely: random casts, casts spread from the sparsest cells, and a
+targeted search around the casts that reached the isolated region.
 
 Why three phases: random actions pile up in the natural landing zone, so uniform sampling alone
-leaves the arms of the lake and the pond with a handful of points. The spread phase re-casts small
-perturbations of actions that landed in the least visited cells of a 26 x 16 grid, which fills the
-arms. The pond is surrounded by land, so perturbing main-lake casts never reaches it; the pond
-phase re-casts perturbations of the actions that did land in it (the random phase finds a few
-dozen), so the teaching set can hold a demonstration there. Only water landings are outcomes:
-casts that land on land or never reach the water are counted, not saved.
-Saves the landed casts (actions and normalised outcomes, float32) as a compressed .npz and a PNG.
+leaves the arms of the lake and the isolated pond with a handful of points. The spread phase
+re-casts small perturbations (std ``--sigma``) of actions that landed in the least visited cells
+of a 26 x 16 grid (a landing is drawn as parent with weight 1 / landings in its cell), which
+fills the arms to their tips. The pond is ringed by land, so perturbing main-lake casts never
+reaches it; the isolated phase re-casts small perturbations (std ``--pond-sigma``) of the casts
+that did land in it (parents: every pond landing so far, the new ones included), so that the
+benchmark, the teaching set and the floor find landings there. Only water landings are outcomes:
+casts that land on land or never come down are counted, not saved.
 
-    python -m sim_bridge.tools.map_reachable --random 10000 --spread 5000 --pond 800 --seed 0
+Everything follows from ``--seed`` (actions, parents, perturbations and the world's noise): the
+same command writes the same file, byte for byte. Actions are stored as int16 (action x 32767:
+at most 1.5e-5 from the cast action, a landing shift of about 1e-5 by the measured sensitivity)
+so that about 12,000 landings fit in well under 1 MB; ``data_files`` returns them as floats.
+
+    python -m sim_bridge.tools.map_reachable --random 10000 --spread 6000 --pond 1500 --seed 0
 
 ``--pond-radius R`` (metres) maps a world whose isolated pond is smaller (``lake.Lake``); its
 random phase may then find no pond landing (the pond phase then stops with an error).
@@ -24,6 +30,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from sim_bridge.data_files import ACTION_SCALE
 from sim_bridge.fishing_world import FishingWorld, Status
 from sim_bridge.lake import DEFAULT_LAKE, Lake, lake_with_pond_radius
 
@@ -75,7 +82,7 @@ def run_mapping(n_random: int, n_spread: int, seed: int, sigma: float = 0.05,
     for a in rng.uniform(-1, 1, (n_random, world.action_dim)):
         m.cast(a)
     stats = {"random_water": len(m.outcomes), "random_land": m.land,
-             "random_pond": int(in_isolated_region(np.array(m.outcomes)).sum())}
+             "random_pond": int(in_isolated_region(np.array(m.outcomes).reshape(-1, 2)).sum())}
     done = 0
     while done < n_spread:
         batch = min(500, n_spread - done)
@@ -86,6 +93,7 @@ def run_mapping(n_random: int, n_spread: int, seed: int, sigma: float = 0.05,
         for p in parents:
             m.cast(np.clip(m.actions[p] + sigma * rng.standard_normal(world.action_dim), -1, 1))
         done += batch
+    n_before = len(m.outcomes)
     done = 0
     while done < n_pond:  # parents: every pond landing so far, the new ones included
         batch = min(100, n_pond - done)
@@ -99,9 +107,11 @@ def run_mapping(n_random: int, n_spread: int, seed: int, sigma: float = 0.05,
     bar.close()
     world.close()
     outcomes = np.array(m.outcomes, dtype=np.float32)
-    stats |= {"water": len(outcomes), "land": m.land, "no_water": m.no_water,
+    stats |= {"pond_phase_water": len(outcomes) - n_before,
+              "pond_phase_pond": int(in_isolated_region(outcomes[n_before:]).sum()),
+              "water": len(outcomes), "land": m.land, "no_water": m.no_water,
               "failed": m.failed, "pond": int(in_isolated_region(outcomes).sum())}
-    return np.array(m.actions, dtype=np.float32), outcomes, stats
+    return np.array(m.actions), outcomes, stats
 
 
 def save_png(outcomes: np.ndarray, path: Path, title: str, lake: Lake = DEFAULT_LAKE) -> None:
@@ -114,7 +124,7 @@ def save_png(outcomes: np.ndarray, path: Path, title: str, lake: Lake = DEFAULT_
     fig, ax = plt.subplots(figsize=(6, 5.6))
     pond = lake.in_isolated_region(outcomes)
     ax.scatter(outcomes[~pond, 0], outcomes[~pond, 1], s=1, alpha=0.3, label="main lake")
-    ax.scatter(outcomes[pond, 0], outcomes[pond, 1], s=1, alpha=0.5, color="tab:orange",
+    ax.scatter(outcomes[pond, 0], outcomes[pond, 1], s=2, alpha=0.7, color="tab:orange",
                label="isolated pond")
     draw_shoreline(ax, lake=lake)
     ax.set(xlim=(-1, 1), ylim=(-1, 1), aspect="equal", xlabel="outcome x (normalised)",
@@ -129,28 +139,34 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--random", type=int, default=10000, help="uniform random casts")
-    parser.add_argument("--spread", type=int, default=5000, help="casts spread from sparse cells")
+    parser.add_argument("--spread", type=int, default=6000, help="casts spread from sparse cells")
     parser.add_argument("--sigma", type=float, default=0.05, help="perturbation std (action units)")
-    parser.add_argument("--pond", type=int, default=800,
+    parser.add_argument("--pond", type=int, default=1500,
                         help="casts perturbing the actions that reached the isolated pond")
     parser.add_argument("--pond-sigma", type=float, default=0.01,
                         help="perturbation std of the pond search (action units)")
     parser.add_argument("--seed", type=int, default=0, help="seed of actions and world noise")
     parser.add_argument("--pond-radius", type=float, default=None,
-                        help="radius (m) of the isolated pond of the world (default: 0.95)")
+                        help="radius (m) of the isolated pond of the world (default: the "
+                             "default world's)")
     parser.add_argument("--output", default="sim_bridge/data/reachable_map.npz")
     parser.add_argument("--png", default="docs/figures/sim_reachable_map.png")
     args = parser.parse_args(argv)
+    if min(args.random, args.spread, args.pond) < 0 or args.random < 1:
+        parser.error("--random must be >= 1, --spread and --pond >= 0")
     lake = lake_with_pond_radius(args.pond_radius)
     actions, outcomes, stats = run_mapping(args.random, args.spread, args.seed, args.sigma,
                                            args.pond, args.pond_sigma, lake=lake)
     extra = {} if lake.is_default else {"pond_radius": lake.pond[2]}
-    np.savez_compressed(args.output, actions=actions, outcomes=outcomes, seed=args.seed,
+    np.savez_compressed(args.output, actions=np.round(actions * ACTION_SCALE).astype(np.int16),
+                        action_scale=ACTION_SCALE, outcomes=outcomes, seed=args.seed,
                         n_random=args.random, n_spread=args.spread, n_pond=args.pond,
                         sigma=args.sigma, pond_sigma=args.pond_sigma, **extra)
     save_png(outcomes, Path(args.png), f"{len(outcomes)} water landings (seed {args.seed})",
              lake)
-    print(f"{len(outcomes)} water landings -> {args.output}, {args.png}; {stats}")
+    size = Path(args.output).stat().st_size
+    print(f"{len(outcomes)} water landings -> {args.output} ({size / 1e6:.2f} MB), {args.png}; "
+          f"{stats}")
 
 
 if __name__ == "__main__":
