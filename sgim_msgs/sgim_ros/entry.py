@@ -1,8 +1,9 @@
 """The entry point every node of the graph shares, the base of nodes that await, and a
 bounded await.
 
-A node that cannot start (a bad parameter, a missing file) says why in one line and exits with
-code 2; Ctrl-C and external shutdown end it cleanly, and it is always destroyed.
+A node that cannot start (a bad parameter, an unknown parameter name, an unreadable parameter
+file, a missing file) says why in one line and exits with code 2; Ctrl-C and external shutdown
+end it cleanly, and it is always destroyed.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.task import Future
 
+from sgim_ros.command_line import check_command_line, read_parameter_file, ros_arguments
 from sgim_ros.params import ParameterError
 
 
@@ -59,11 +61,26 @@ def run_node(factory: Callable[[], Node], args: list[str] | None = None,
     setting `node.finished = True` (with `node.exit_code`). `refusals`: more exceptions that
     mean "cannot start with this configuration".
     """
-    rclpy.init(args=args)
+    argv = sys.argv if args is None else args
+    try:
+        for path in ros_arguments(argv)[1]:
+            read_parameter_file(path)  # rcl reads a file holding a plain string as "nothing"
+        rclpy.init(args=args)
+    except ParameterError as error:
+        print(f"[{factory.__name__}] {error}", file=sys.stderr, flush=True)
+        return 2
+    except Exception as error:  # rcl's own parse errors (RCLError): one line, not a traceback
+        print(f"[{factory.__name__}] {str(error).split(', at /')[0]}", file=sys.stderr,
+              flush=True)
+        return 2
+    node = None
     try:
         node = factory()
+        check_command_line(node, argv)
     except (ParameterError, ValueError, FileNotFoundError, *refusals) as error:
         print(f"[{factory.__name__}] {error}", file=sys.stderr, flush=True)
+        if node is not None:
+            node.destroy_node()
         rclpy.try_shutdown()
         return 2
     executor = SingleThreadedExecutor()
@@ -78,3 +95,4 @@ def run_node(factory: Callable[[], Node], args: list[str] | None = None,
         node.destroy_node()
         rclpy.try_shutdown()
     return int(getattr(node, "exit_code", 0))
+
