@@ -340,10 +340,8 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
                                 f"code {arbiter_code}; see {supervisor.log_of(ARBITER)})")
             supervisor.wait_for_recorder()
             outcome, code = "finished", 0
-        except Interrupted as signal_name:
-            outcome = f"interrupted by {signal_name} at movement " \
-                      f"{progress.count if progress else plan.done}"
-            code = 128 + signal_name.signum
+        except Interrupted as stop:
+            outcome, code = f"interrupted by {stop}", 128 + stop.signum
         except RunFailed as error:
             outcome, code = (str(error) if str(error).startswith("aborted") else
                              f"failed: {error}"), 1
@@ -359,6 +357,8 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
                     code = 1
                 if reservation is not None:
                     reservation.release()
+                if code > 128:  # the count once the last messages are in
+                    outcome += f" at movement {progress.count if progress else plan.done}"
                 meta.update(ended=datetime.now(UTC).isoformat(), outcome=outcome,
                             exit_code=code, movements_done=progress.count if progress else
                             plan.done, restarts=supervisor.respawns if supervisor else {},
