@@ -97,3 +97,9 @@ def test_metadata_is_replaced_whole(tmp_path):
     write_metadata(tmp_path, dict(META, outcome="finished"))
     assert yaml.safe_load((tmp_path / "metadata.yaml").read_text())["outcome"] == "finished"
     assert [p.name for p in tmp_path.iterdir()] == ["metadata.yaml"]
+
+
+def test_a_run_folder_without_any_recording_resumes_from_the_start(tmp_path):
+    # The launcher was stopped before the recorder made its bag.
+    state = check_resume(tmp_path, dict(META, movements_done=0))
+    assert (state.recorded, state.lost, state.complete) == (0, None, False)

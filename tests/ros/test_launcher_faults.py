@@ -76,7 +76,7 @@ def test_a_killed_launcher_leaves_no_node_and_holds_its_domain_until_they_end(
     # The evaluator's process lingers 4 s after its node ends (a slow shutdown), holding what
     # it inherited: the domain must stay reserved until it is gone.
     linger = "sh -c 'trap \"\" INT TERM HUP; \"$@\"; sleep 4' linger"
-    child = launch(ros_processes, "run-killed", "random", "--movements", "600",
+    child = launch(ros_processes, "run-killed", "random", "--movements", "300",
                    "--eval-every", "0", "--runs-dir", str(tmp_path), "--name", "killed",
                    "--quiet", "--prefix", f"evaluator={linger}")
     wait_for(lambda: progress(run_dir) > 0, 120, "the run to make movements")
@@ -132,8 +132,8 @@ def test_a_recorder_that_cannot_write_fails_the_run_and_resume_repairs_it(ros_pr
                                                                           tmp_path):
     """A full disk, as the recorder meets it: writes fail (here past a file-size limit)."""
     run_dir = tmp_path / "full"
-    child = launch(ros_processes, "run-full", "random", "--movements", "400",
-                   "--eval-every", "200", "--runs-dir", str(tmp_path), "--name", "full",
+    child = launch(ros_processes, "run-full", "random", "--movements", "200",
+                   "--eval-every", "100", "--runs-dir", str(tmp_path), "--name", "full",
                    "--quiet", "--prefix", "recorder=prlimit --fsize=4000")
     output, _ = child.communicate(timeout=300)
     assert child.returncode == 1, output[-3000:]
@@ -144,7 +144,7 @@ def test_a_recorder_that_cannot_write_fails_the_run_and_resume_repairs_it(ros_pr
     from sgim_nodes.graph.run_folder import recorded_count
 
     recorded = recorded_count(run_dir)
-    assert recorded < 400
+    assert recorded < 200
     again = launch(ros_processes, "resume-full", "--resume", str(run_dir), "--quiet")
     output, _ = again.communicate(timeout=300)
     assert again.returncode == 0, output[-3000:]
@@ -153,7 +153,7 @@ def test_a_recorder_that_cannot_write_fails_the_run_and_resume_repairs_it(ros_pr
     from sgim_nodes.bag.resume import load_run_folder
 
     run = load_run_folder(run_dir)
-    assert [m.index for m in run.movements] == list(range(1, 401))
+    assert [m.index for m in run.movements] == list(range(1, 201))
     assert metadata(run_dir)["outcome"] == "finished"
 
 

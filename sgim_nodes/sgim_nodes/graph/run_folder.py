@@ -113,12 +113,12 @@ def _params_hint(run_dir: Path) -> dict[str, Any]:
 
 def recorded_count(run_dir: Path) -> int:
     """The last movement index the run's recordings hold (0 when none)."""
-    from sgim_nodes.bag.resume import load_run_folder
+    from sgim_nodes.bag.resume import load_run_folder, segments
 
+    if not segments(run_dir):
+        return 0  # the launcher stopped before the recorder made its bag
     try:
         records = load_run_folder(run_dir)
-    except FileNotFoundError:
-        return 0
     except Exception as error:  # a reader's refusal: say it in one line
         raise RunFolderError(f"cannot read the recordings of {run_dir}: {error}") from None
     return max((m.index for m in records.movements), default=0)
