@@ -336,8 +336,10 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
             supervisor.start()
             arbiter_code = supervisor.watch()
             if arbiter_code != 0:
-                raise RunFailed(f"aborted: {progress.message or 'the arbiter'} (arbiter exit "
-                                f"code {arbiter_code}; see {supervisor.log_of(ARBITER)})")
+                why = (progress.message if progress.over else "") or supervise.log_reason(
+                    supervisor.log_of(ARBITER)) or "the arbiter ended"
+                raise RunFailed(f"aborted: {why} (arbiter exit code {arbiter_code}; see "
+                                f"{supervisor.log_of(ARBITER)})")
             supervisor.wait_for_recorder()
             outcome, code = "finished", 0
         except Interrupted as stop:

@@ -225,14 +225,20 @@ def _no_rclpy_signal_handlers():
 
 
 def log_reason(log: Path, limit: int = 300) -> str:
-    """The last error line of a node's log, to quote in the run's outcome."""
+    """Why a node ended, from its log, to quote in the run's outcome: its first logged error
+    (the cause; later ones tend to follow from it), else the last line that looks like one
+    (a traceback's exception). DDS transport chatter is not a reason."""
     try:
-        lines = log.read_text(errors="replace").splitlines()
+        lines = [line.strip() for line in log.read_text(errors="replace").splitlines()
+                 if "RTPS_" not in line]
     except OSError:
         return ""
+    logged = [line for line in lines if line.startswith("[ERROR]")]
+    if logged:
+        return ROS_LOG_PREFIX.sub("", logged[0])[:limit]
     for line in reversed(lines):
-        if any(word in line for word in ("ERROR", "Error", "error", "refused", "cannot")):
-            return ROS_LOG_PREFIX.sub("", line.strip())[:limit]
+        if any(word in line for word in ("Error", "error", "refused", "cannot")):
+            return line[:limit]
     return ""
 
 
@@ -257,11 +263,10 @@ class Supervisor:
         return self.log_dir / (f"{name}.restart{restarts}.log" if restarts else f"{name}.log")
 
     def failure(self, name: str, code: int) -> str:
-        if name == RECORDER:
-            what = ("the recorder could not write the bag" if code == RECORDER_WRITE_ERROR
-                    else "the recorder failed")
+        if name == RECORDER and code == RECORDER_WRITE_ERROR:
+            what = "the recorder could not write the bag"
         else:
-            what = f"node {name} stopped"
+            what = f"the {name} node stopped" if name == RECORDER else f"node {name} stopped"
         reason = log_reason(self.log_of(name))
         return (f"{what} (exit {code}) at movement {self.progress.count}"
                 + (f": {reason}" if reason else "") + f"; see {self.log_of(name)}")
