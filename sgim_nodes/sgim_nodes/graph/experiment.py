@@ -28,7 +28,6 @@ import os
 import platform
 import shlex
 import subprocess
-import sys
 import time
 from collections.abc import Sequence
 from datetime import UTC, datetime
@@ -376,7 +375,6 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    sys.stderr = supervise.OUT  # tracebacks too survive a closed pipe
     supervise.watch_owner()
     return run(parse_args(argv))
 

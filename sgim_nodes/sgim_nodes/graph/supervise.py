@@ -52,10 +52,14 @@ class SafeStream:
     noticed, the descriptor is pointed at /dev/null, so that nothing later fails either),
     and every line also goes to the run's launcher.log when one is open."""
 
-    def __init__(self, stream: TextIO) -> None:
-        self.stream = stream
+    def __init__(self, stream: TextIO | None = None) -> None:
+        self._stream = stream  # None: whatever sys.stderr is when writing
         self.broken = False
         self.log: TextIO | None = None
+
+    @property
+    def stream(self) -> TextIO:
+        return sys.stderr if self._stream is None else self._stream
 
     def write(self, text: str) -> int:
         if self.log is not None:
@@ -91,7 +95,7 @@ class SafeStream:
         return self.stream.fileno()
 
 
-OUT = SafeStream(sys.stderr)
+OUT = SafeStream()
 
 
 def say(message: str) -> None:
