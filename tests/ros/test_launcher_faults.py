@@ -141,6 +141,7 @@ def test_a_recorder_that_cannot_write_fails_the_run_and_resume_repairs_it(ros_pr
     assert meta["outcome"].startswith("failed: the recorder"), meta["outcome"]
     assert "Errno 27" in meta["outcome"] or "File too large" in meta["outcome"]
     assert "recorder" in output and "failed" in output
+    assert meta["quarantine"]["write_errors"], meta["quarantine"]  # the recorder's report
 
     from sgim_nodes.graph.run_folder import recorded_count
 

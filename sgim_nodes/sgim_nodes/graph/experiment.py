@@ -365,6 +365,7 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
                             plan.done, restarts=supervisor.respawns if supervisor else {},
                             duration_s=round(time.monotonic() - started, 2))
                 meta.pop("launcher_pid", None)
+                meta["quarantine"] = quarantine(run_dir)
                 write_metadata(run_dir, meta)
                 if progress is not None:
                     progress.close()
@@ -372,6 +373,16 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
         + (" (interrupted: the bag holds what was recorded; --resume carries on)"
            if code > 128 else ""))
     return code
+
+
+def quarantine(run_dir: Path) -> dict[str, Any]:
+    """The recorders' reports of records they refused, summed over the run's segments."""
+    from sgim_nodes.bag.run_folder import quarantine_summary
+
+    try:
+        return quarantine_summary(run_dir)
+    except Exception as error:  # the metadata is written whatever the reports hold
+        return {"unreadable": str(error)}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
