@@ -27,7 +27,14 @@ ARGUMENTS = (
     ("movements", "5000", "movement budget (the paper's: 5000)"),
     ("eval_every", "250", "movements between evaluations"),
     ("period", "150", "movements between demonstrations"),
-    ("teacher", "automatic", "automatic, human or external (see run_experiment.sh --help)"),
+    ("teacher", "automatic", "automatic, human, web or external (see run_experiment.sh "
+     "--help)"),
+    ("wait_for_teacher", "0", "human or web teacher: seconds to wait at each turn (-1: until "
+     "the teacher acts)"),
+    ("web_host", "127.0.0.1", "web teacher: the interface of its page"),
+    ("web_port", "8765", "web teacher: the port of its page"),
+    ("web_token", "", "web teacher: the access token (needed off loopback)"),
+    ("markers", "true", "start the markers node (the run's picture for rviz2 and Foxglove)"),
     ("storage", "mcap", "bag storage: mcap or sqlite3"),
     ("output", "", "bag directory (default: runs/<learner>-seed<N>-<time>/bag)"),
     ("params_file", "", "a ROS parameter file, checked as run_experiment's --params-file"),
@@ -41,10 +48,9 @@ def node_arguments(arguments: Mapping[str, str]) -> list[tuple[str, dict[str, An
     starts."""
     from sgim_nodes.graph.description import MAX_RESPAWNS, RunOptions, graph, parameters
     from sgim_nodes.graph.overrides import parse_assignments, read_parameter_files
+    from sgim_ros.params import ParameterError
 
     def integer(name: str) -> int:
-        from sgim_ros.params import ParameterError
-
         try:
             return int(arguments[name])
         except ValueError:
@@ -57,15 +63,27 @@ def node_arguments(arguments: Mapping[str, str]) -> list[tuple[str, dict[str, An
     learner, seed = arguments["learner"], integer("seed")
     output = arguments.get("output") or str(
         Path("runs") / f"{learner}-seed{seed}-{datetime.now(UTC):%Y%m%d-%H%M%S}" / "bag")
+    try:
+        wait = float(arguments.get("wait_for_teacher", "0"))
+    except ValueError:
+        raise ParameterError(f"launch argument wait_for_teacher:="
+                             f"{arguments['wait_for_teacher']!r} must be seconds") from None
+    markers = arguments.get("markers", "true").lower() not in ("false", "0", "no")
     options = RunOptions(learner, seed, integer("movements"), integer("eval_every"),
                          integer("period"), arguments["teacher"], str(Path(output).resolve()),
-                         arguments["storage"], {**shared, **assigned})
+                         arguments["storage"], {**shared, **assigned}, markers=markers,
+                         wait_for_teacher=wait,
+                         web_host=arguments.get("web_host", "127.0.0.1"),
+                         web_port=integer("web_port") if "web_port" in arguments else 8765,
+                         web_token=arguments.get("web_token", ""),
+                         web_address_file=str(Path(output).resolve().parent
+                                              / "web_teacher.url"))
     values = parameters(options, per_node, {**where, **assigned_where})
     return [(spec.name, {"package": spec.package, "executable": spec.executable,
                          "name": spec.name, "parameters": [values.for_node(spec)],
                          "output": "screen", "respawn": spec.respawn,
                          "respawn_max_retries": MAX_RESPAWNS if spec.respawn else -1})
-            for spec in graph(learner, options.teacher) if not spec.interactive]
+            for spec in graph(learner, options.teacher, markers) if not spec.interactive]
 
 
 def generate_launch_description():

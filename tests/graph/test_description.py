@@ -33,26 +33,25 @@ def _args(*argv):
 
 
 # --- the graph ------------------------------------------------------------------------------
+BASE = ["recorder", "sim_bridge", "evaluator", "markers"]
+GOALS = ["interest_computer", "goal_generator", "low_level_explorer"]
+
+
 @pytest.mark.parametrize(("learner", "teacher", "expected"), [
-    ("random", "automatic", ["recorder", "sim_bridge", "evaluator", "social_interaction"]),
-    ("saggriac", "automatic", ["recorder", "sim_bridge", "evaluator", "interest_computer",
-                               "goal_generator", "low_level_explorer", "social_interaction"]),
-    ("sgim-d", "automatic", ["recorder", "sim_bridge", "evaluator", "interest_computer",
-                             "goal_generator", "low_level_explorer", "imitation", "teacher",
-                             "social_interaction"]),
-    ("sgim-d", "human", ["recorder", "sim_bridge", "evaluator", "interest_computer",
-                         "goal_generator", "low_level_explorer", "imitation", "human_input",
-                         "social_interaction"]),
-    ("demo-only", "external", ["recorder", "sim_bridge", "evaluator", "imitation",
-                               "social_interaction"]),
-    ("random-goals", "automatic", ["recorder", "sim_bridge", "evaluator",
-                                   "interest_computer", "goal_generator",
-                                   "low_level_explorer", "social_interaction"]),
+    ("random", "automatic", [*BASE, "social_interaction"]),
+    ("saggriac", "automatic", [*BASE, *GOALS, "social_interaction"]),
+    ("sgim-d", "automatic", [*BASE, *GOALS, "imitation", "teacher", "social_interaction"]),
+    ("sgim-d", "human", [*BASE, *GOALS, "imitation", "human_input", "social_interaction"]),
+    ("sgim-d", "web", [*BASE, *GOALS, "imitation", "web_teacher", "social_interaction"]),
+    ("demo-only", "external", [*BASE, "imitation", "social_interaction"]),
+    ("random-goals", "automatic", [*BASE, *GOALS, "social_interaction"]),
 ])
 def test_each_learner_gets_its_nodes(learner, teacher, expected):
     from sgim_nodes.graph.description import graph
 
     assert [spec.name for spec in graph(learner, teacher)] == expected
+    without = [spec.name for spec in graph(learner, teacher, markers=False)]
+    assert without == [name for name in expected if name != "markers"]
 
 
 def test_every_node_parameter_has_a_description_and_learner_fields_have_ranges():
@@ -128,9 +127,9 @@ def test_an_unknown_parameter_is_refused_with_a_suggestion():
 def test_a_parameter_of_another_learner_is_accepted_but_not_used():
     from sgim_nodes.graph.description import RunOptions, graph, parameters, unused
 
-    values = parameters(RunOptions("saggriac", overrides={"tolerance": 0.3}))
-    assert values.shared["tolerance"] == 0.3  # the human teacher's: checked, recorded
-    assert unused(["tolerance", "goal_budget"], graph("saggriac")) == ["tolerance"]
+    values = parameters(RunOptions("saggriac", overrides={"execute_timeout": 5.0}))
+    assert values.shared["execute_timeout"] == 5.0  # the human teacher's: checked, recorded
+    assert unused(["execute_timeout", "goal_budget"], graph("saggriac")) == ["execute_timeout"]
 
 
 @pytest.mark.parametrize(("overrides", "message"), [
@@ -221,6 +220,34 @@ def test_the_default_timeout_is_bounded_and_grows_with_the_budget():
     assert 600 < default_timeout(1000) < default_timeout(5000) < 4 * 3600
 
 
+def test_web_teacher_options_become_its_parameters_and_the_token_stays_out_of_metadata(
+        tmp_path):
+    from sgim_nodes.graph.experiment import plan_new
+
+    plan = plan_new(_args("sgim-d", "--teacher", "web", "--web-host", "0.0.0.0",
+                          "--wait-for-teacher", "forever", "--runs-dir", str(tmp_path),
+                          "--name", "web"))
+    plan.lock.release()
+    web = {spec.name: spec for spec in plan.nodes}["web_teacher"]
+    values = plan.values.for_node(web)
+    assert values["host"] == "0.0.0.0" and len(values["token"]) >= 16  # made for it
+    assert values["address_file"] == str(tmp_path / "web" / "web_teacher.url")
+    assert plan.values.shared["wait_for_teacher"] == -1.0
+    assert plan.meta["node_parameters"]["web_teacher"]["token"] == "<set>"
+    assert values["token"] not in yaml.safe_dump(plan.meta)
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["--wait-for-teacher", "30"], "needs a human teacher"),
+    (["--teacher", "web", "--web-token", "short"], "at least 16 characters"),
+    (["--web-port", "70000"], "--web-port must be in 0..65535"),
+])
+def test_web_and_human_teacher_options_are_checked(argv, message, capsys):
+    with pytest.raises(SystemExit):
+        _args("sgim-d", *argv)
+    assert message in capsys.readouterr().err
+
+
 def test_run_options_cannot_be_changed_on_resume(capsys):
     with pytest.raises(SystemExit):
         _args("--resume", "runs/x", "--param", "goal_budget=3", "--seed", "2")
@@ -241,6 +268,7 @@ def _what_nodes_read(params_file: Path, spec) -> dict:
 @pytest.mark.parametrize(("learner", "teacher"), [("sgim-d", "automatic"),
                                                   ("saggriac", "automatic"),
                                                   ("demo-only", "external"),
+                                                  ("sgim-d", "web"),
                                                   ("random", "automatic")])
 def test_the_launch_file_starts_what_run_experiment_starts(tmp_path, learner, teacher):
     from sgim_nodes.graph.experiment import plan_new
@@ -251,7 +279,8 @@ def test_the_launch_file_starts_what_run_experiment_starts(tmp_path, learner, te
     argv = [learner, "--seed", "4", "--movements", "300", "--eval-every", "100", "--period",
             "50", "--teacher", teacher, "--runs-dir", str(tmp_path), "--name", "run",
             "--params-file", str(params_file), "--param", "imitation_count=3"]
-    plan = plan_new(_args(*argv))
+    web = ["--wait-for-teacher", "30", "--web-port", "0"] if teacher == "web" else []
+    plan = plan_new(_args(*argv, *web))
     plan.lock.release()
     plan.params_file.write_text(yaml.safe_dump(plan.values.to_yaml()))  # as launch() does
     launcher = {spec.name: (spec.package, spec.executable, _what_nodes_read(plan.params_file,
@@ -262,7 +291,8 @@ def test_the_launch_file_starts_what_run_experiment_starts(tmp_path, learner, te
         "learner": learner, "seed": "4", "movements": "300", "eval_every": "100",
         "period": "50", "teacher": teacher, "storage": "mcap",
         "output": str(tmp_path / "run" / "bag"), "params_file": str(params_file),
-        "param": "imitation_count=3"})
+        "param": "imitation_count=3",
+        **({"wait_for_teacher": "30", "web_port": "0"} if teacher == "web" else {})})
     launched = {name: (kw["package"], kw["executable"], kw["parameters"][0])
                 for name, kw in launch}
     assert launched == launcher
@@ -311,13 +341,10 @@ def test_the_launch_file_builds_a_launch_description_with_launch_ros(monkeypatch
     context = dict(declared, learner="saggriac", output=str(tmp_path / "bag"))
     actions = setup(context)
     nodes = [a for a in actions if type(a).__name__ == "Node"]
-    assert [n.kwargs["name"] for n in nodes] == [
-        "recorder", "sim_bridge", "evaluator", "interest_computer", "goal_generator",
-        "low_level_explorer", "social_interaction"]
+    assert [n.kwargs["name"] for n in nodes] == [*BASE, *GOALS, "social_interaction"]
     # Every node but the simulator (restarted) and the arbiter (the recorder follows it)
     # ends the launch when it ends.
     watched = [h.args[0].kwargs["target_action"].kwargs["name"]
                for h in actions if type(h).__name__ == "RegisterEventHandler"]
-    assert watched == ["recorder", "evaluator", "interest_computer", "goal_generator",
-                       "low_level_explorer"]
+    assert watched == ["recorder", "evaluator", "markers", *GOALS]
     assert description in made["LaunchDescription"]

@@ -28,9 +28,11 @@ from sgim_ros.params import Param, ParameterError
 
 LEARNER_CONFIG = Path(__file__).resolve().parents[2] / "config" / "learner.yaml"
 SOCIAL = ("sgim-d", "demo-only")
-TEACHERS = ("automatic", "human", "external")
+TEACHERS = ("automatic", "human", "web", "external")
 # The arbiter only knows synchronous (automatic) and asynchronous (human) demonstrations.
-ARBITER_TEACHER = {"automatic": "automatic", "human": "human", "external": "human"}
+ARBITER_TEACHER = {"automatic": "automatic", "human": "human", "web": "human",
+                   "external": "human"}
+WAIT_FOREVER = -1.0  # wait_for_teacher: until the teacher acts (the arbiter's FOREVER)
 STORAGES = ("mcap", "sqlite3")
 MAX_RESPAWNS = 3
 
@@ -68,12 +70,14 @@ NODES = {spec.name: spec for spec in (
     NodeSpec("sgim_nodes", "recorder", "sgim_nodes.nodes.recorder"),
     NodeSpec("sim_bridge", "sim_bridge", "sim_bridge.sim_bridge_node", respawn=True),
     NodeSpec("sgim_nodes", "evaluator", "sgim_nodes.nodes.evaluator"),
+    NodeSpec("sgim_nodes", "markers", "sgim_nodes.nodes.markers"),
     NodeSpec("sgim_nodes", "interest_computer", "sgim_nodes.nodes.interest_computer"),
     NodeSpec("sgim_nodes", "goal_generator", "sgim_nodes.nodes.goal_generator"),
     NodeSpec("sgim_nodes", "low_level_explorer", "sgim_nodes.nodes.low_level_explorer"),
     NodeSpec("sgim_nodes", "imitation", "sgim_nodes.nodes.imitation"),
     NodeSpec("teacher", "teacher", "teacher.teacher_node"),
     NodeSpec("teacher", "human_input", "teacher.human_input_node", interactive=True),
+    NodeSpec("teacher", "web_teacher", "teacher.web_teacher_node"),
     NodeSpec("sgim_nodes", "social_interaction", "sgim_nodes.nodes.social_interaction"),
 )}
 ARBITER = "social_interaction"
@@ -94,6 +98,12 @@ class RunOptions:
     output: str = ""  # the bag directory
     storage: str = "mcap"
     overrides: Mapping[str, Any] = field(default_factory=dict)
+    markers: bool = True  # the markers node (the run's picture for rviz2 and Foxglove)
+    wait_for_teacher: float = 0.0  # human or web teacher: seconds at each turn, -1: forever
+    web_host: str = "127.0.0.1"
+    web_port: int = 8765
+    web_token: str = ""
+    web_address_file: str = ""  # where the web teacher writes its page's address
 
     def __post_init__(self) -> None:
         problems = []
@@ -109,6 +119,11 @@ class RunOptions:
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < low:
                 problems.append(f"{name} must be an integer >= {low}, got {value!r}")
+        if not (self.wait_for_teacher >= 0 or self.wait_for_teacher == WAIT_FOREVER):
+            problems.append(f"wait_for_teacher must be seconds >= 0 or {WAIT_FOREVER:g} "
+                            f"(forever), got {self.wait_for_teacher!r}")
+        elif self.wait_for_teacher and self.teacher not in ("human", "web"):
+            problems.append("wait_for_teacher needs a human teacher (human or web)")
         if problems:
             raise ParameterError("; ".join(problems))
 
@@ -119,20 +134,24 @@ OPTION_PARAMETERS = {"learner": "the learner argument", "seed": "--seed",
                      "demonstration_period": "--period", "teacher": "--teacher",
                      "output": "the run folder", "storage": "--storage",
                      "wait_for_recorder": "the launcher (always true in a run)",
-                     "resume_from": "--resume", "resume_segments": "--resume"}
+                     "resume_from": "--resume", "resume_segments": "--resume",
+                     "wait_for_teacher": "--wait-for-teacher", "host": "--web-host",
+                     "port": "--web-port", "token": "--web-token",
+                     "address_file": "the run folder"}
+SECRETS = ("token",)  # never written into metadata.yaml
 
 
-def graph(learner: str, teacher: str = "automatic") -> list[NodeSpec]:
+def graph(learner: str, teacher: str = "automatic", markers: bool = True) -> list[NodeSpec]:
     """The nodes a run of `learner` needs, the recorder first and the arbiter last."""
-    names = ["recorder", "sim_bridge", "evaluator"]
+    names = ["recorder", "sim_bridge", "evaluator"] + (["markers"] if markers else [])
     if learner in GOAL_BABBLERS:
         names += ["interest_computer", "goal_generator", "low_level_explorer"]
     if learner in SOCIAL:
         names.append("imitation")
-        if teacher == "automatic":
-            names.append("teacher")
-        elif teacher == "human":
-            names.append("human_input")
+        teacher_node = {"automatic": "teacher", "human": "human_input",
+                        "web": "web_teacher"}.get(teacher)
+        if teacher_node:
+            names.append(teacher_node)
     names.append(ARBITER)
     return [NODES[name] for name in names]
 
@@ -212,9 +231,9 @@ class RunParameters:
 
     def effective(self, nodes: Iterable[NodeSpec]) -> dict[str, dict[str, Any]]:
         """Node -> every parameter it declares with the value it runs with (given or its
-        default): what a run's metadata records."""
-        return {spec.name: {**{p.name: p.default for p in spec.params}, **self.for_node(spec)}
-                for spec in nodes}
+        default): what a run's metadata records (secrets masked)."""
+        return {spec.name: masked({**{p.name: p.default for p in spec.params},
+                                   **self.for_node(spec)}) for spec in nodes}
 
     def to_yaml(self) -> dict[str, Any]:
         """The ROS parameter file of the run."""
@@ -228,6 +247,11 @@ class RunParameters:
         shared = dict(data["/**"]["ros__parameters"])
         return cls(shared, {name: dict(body["ros__parameters"]) for name, body in data.items()
                             if name != "/**"})
+
+
+def masked(values: Mapping[str, Any]) -> dict[str, Any]:
+    """The values with every secret (the web teacher's token) replaced by a mark."""
+    return {k: ("<set>" if v else "") if k in SECRETS else v for k, v in values.items()}
 
 
 def parameters(options: RunOptions, node_overrides: Mapping[str, Mapping[str, Any]] | None = None,
@@ -247,9 +271,13 @@ def parameters(options: RunOptions, node_overrides: Mapping[str, Mapping[str, An
         learner=options.learner, seed=options.seed, movements=options.movements,
         eval_every=options.eval_every, demonstration_period=options.period,
         teacher=ARBITER_TEACHER[options.teacher] if options.learner in SOCIAL else "none",
-        storage=options.storage, wait_for_recorder=True)
+        storage=options.storage, wait_for_recorder=True,
+        wait_for_teacher=options.wait_for_teacher)
     if options.output:
         values["output"] = options.output
+    if options.teacher == "web" and options.learner in SOCIAL:
+        values.update(host=options.web_host, port=options.web_port, token=options.web_token,
+                      address_file=options.web_address_file)
     problems = []
     try:
         shared = check(values, where)

@@ -23,9 +23,11 @@ folder), 128+N stopped by signal N (130: Ctrl-C).
 from __future__ import annotations
 
 import argparse
+import ipaddress
 import math
 import os
 import platform
+import secrets
 import shlex
 import subprocess
 import time
@@ -48,6 +50,7 @@ from sgim_nodes.graph.description import (
     RunParameters,
     check,
     graph,
+    masked,
     parameters,
     unused,
 )
@@ -70,16 +73,45 @@ from sgim_ros.params import ParameterError
 REPO = Path(__file__).resolve().parents[3]
 ROS2RUN = REPO / "ros_ws" / "ros2run.sh"
 DEFAULTS = {"seed": 0, "movements": 5000, "eval_every": 250, "period": 150,
-            "teacher": "automatic", "storage": "mcap"}
+            "teacher": "automatic", "storage": "mcap", "wait_for_teacher": 0.0,
+            "web_port": 8765, "web_host": "127.0.0.1", "web_token": "", "no_markers": False}
 # Options a resumed run takes from its folder: giving one with --resume is refused.
 RUN_OPTIONS = ("seed", "movements", "eval_every", "period", "teacher", "storage", "name",
-               "param", "params_file")
+               "param", "params_file", "wait_for_teacher", "web_port", "web_host",
+               "web_token", "no_markers")
+FOREVER = ("forever", "inf", "-1")  # --wait-for-teacher values that mean "until it acts"
+WEB_TOKEN_MIN = 16  # the web teacher's own minimum (teacher.web.server.MIN_TOKEN)
+HUMAN_TIMEOUT = 24 * 3600.0  # a person teaches at a person's pace
 
 
-def default_timeout(movements: int) -> float:
+def default_timeout(movements: int, teacher: str = "automatic") -> float:
     """Generous: a 5000-movement run takes about 2 minutes on 2 free cores; this allows 25
-    times that, and bounds a run whose every inner wait somehow failed to."""
+    times that, and bounds a run whose every inner wait somehow failed to. A run taught by a
+    person may wait for them (--wait-for-teacher, pause): a day."""
+    if teacher in ("human", "web"):
+        return HUMAN_TIMEOUT
     return 600.0 + 0.5 * movements
+
+
+def is_loopback(host: str) -> bool:
+    """Whether the web teacher would serve this machine only (no token needed)."""
+    try:
+        return host == "localhost" or ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def wait_seconds(text: str) -> float:
+    """--wait-for-teacher: seconds >= 0, or forever (the arbiter's -1)."""
+    if text.strip().lower() in FOREVER:
+        return -1.0
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds or 'forever', got {text!r}") from None
+    if not value >= 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected seconds >= 0 or 'forever', got {text!r}")
+    return value
 
 
 def versions() -> dict[str, str]:
@@ -122,9 +154,24 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                    help="movements between demonstrations; paper 150 (default: 150)")
     p.add_argument("--teacher", choices=TEACHERS,
                    help="automatic (default): the teacher node, every --period movements; "
-                        "human: you, at the human_input prompt in this terminal; external: no "
-                        "teacher node, demonstrations come from any other publisher at any "
-                        "time")
+                        "human: you, at the human_input prompt in this terminal; web: you, on "
+                        "the web_teacher page (its address is printed); external: no teacher "
+                        "node, demonstrations come from any other publisher at any time")
+    p.add_argument("--wait-for-teacher", type=wait_seconds, metavar="SECONDS",
+                   help="human or web teacher: stop every --period movements and wait this "
+                        "long for a demonstration (0: never wait; 'forever': until the "
+                        "teacher demonstrates or resumes). Default: 0")
+    p.add_argument("--web-port", type=int,
+                   help="web teacher: the page's port (0: any free one; default 8765)")
+    p.add_argument("--web-host",
+                   help="web teacher: the interface to serve on (default: 127.0.0.1, this "
+                        "machine only; another one needs an access token, generated unless "
+                        "--web-token)")
+    p.add_argument("--web-token",
+                   help="web teacher: the access token the page's address must carry")
+    p.add_argument("--no-markers", action="store_const", const=True,
+                   help="do not start the markers node (MarkerArray topics for rviz2 and "
+                        "Foxglove, recorded in the bag)")
     p.add_argument("--runs-dir", type=Path, default=REPO / "runs",
                    help="where the run folder is made (default: runs/)")
     p.add_argument("--name", help="run folder name (default: <learner>-seed<N>-<time>)")
@@ -144,7 +191,8 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                         "(default: reserve a free one)")
     p.add_argument("--timeout", type=float, default=None,
                    help="fail the run after this many seconds (> 0; default: 600 + 0.5 per "
-                        "movement, 3100 s for 5000 movements)")
+                        "movement, 3100 s for 5000 movements; a day with a human or web "
+                        "teacher)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     args = p.parse_args(argv)
     if (args.learner is None) == (args.resume is None):
@@ -167,6 +215,15 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         p.error(f"--timeout must be a number of seconds > 0, got {args.timeout:g}")
     if args.domain is not None and not 0 <= args.domain <= 232:
         p.error(f"--domain must be in 0..232, got {args.domain}")
+    if not 0 <= args.web_port <= 65535:
+        p.error("--web-port must be in 0..65535")
+    if args.teacher == "web":
+        if not is_loopback(args.web_host) and not args.web_token:
+            args.web_token = secrets.token_urlsafe(18)
+        if args.web_token and len(args.web_token) < WEB_TOKEN_MIN:
+            p.error(f"--web-token must have at least {WEB_TOKEN_MIN} characters")
+    if args.wait_for_teacher and args.teacher not in ("human", "web"):
+        p.error("--wait-for-teacher needs a human teacher (--teacher human or web)")
     return args
 
 
@@ -189,11 +246,13 @@ class Plan:
 
     def __init__(self, run_dir: Path, learner: str, teacher: str, values: RunParameters,
                  meta: dict[str, Any], params_file: Path, log_dir: Path, lock: RunLock,
-                 done: int = 0) -> None:
+                 done: int = 0, markers: bool = True) -> None:
         self.run_dir, self.learner, self.teacher = run_dir, learner, teacher
         self.values, self.meta, self.params_file = values, meta, params_file
         self.log_dir, self.lock, self.done = log_dir, lock, done
-        self.nodes = graph(learner, teacher)
+        self.nodes = graph(learner, teacher, markers)
+        self.address_file = (Path(values.shared["address_file"])
+                             if values.shared.get("address_file") else None)
 
 
 def plan_new(args: argparse.Namespace) -> Plan:
@@ -204,9 +263,12 @@ def plan_new(args: argparse.Namespace) -> Plan:
     run_dir = args.runs_dir / (args.name or f"{args.learner}-seed{args.seed}-{stamp}")
     options = RunOptions(args.learner, args.seed, args.movements, args.eval_every, args.period,
                          args.teacher, str(run_dir / "bag"), args.storage,
-                         {**files_shared, **assigned})
+                         {**files_shared, **assigned}, markers=not args.no_markers,
+                         wait_for_teacher=args.wait_for_teacher, web_host=args.web_host,
+                         web_port=args.web_port, web_token=args.web_token,
+                         web_address_file=str(run_dir / "web_teacher.url"))
     values = parameters(options, files_per_node, {**where, **assigned_where})
-    nodes = graph(args.learner, args.teacher)
+    nodes = graph(args.learner, args.teacher, not args.no_markers)
     for name in unused({**files_shared, **assigned}, nodes):
         say(f"note: parameter '{name}' is not used by a {args.learner} run "
             f"(teacher {args.teacher})")
@@ -219,14 +281,15 @@ def plan_new(args: argparse.Namespace) -> Plan:
     meta = {
         "learner": args.learner, "seed": args.seed, "movements": args.movements,
         "teacher": values.shared["teacher"], "teacher_mode": args.teacher,
+        "markers": not args.no_markers,
         "started": datetime.now(UTC).isoformat(), "outcome": RUNNING,
-        "launcher_pid": os.getpid(), "parameters": values.shared,
+        "launcher_pid": os.getpid(), "parameters": masked(values.shared),
         "node_parameters": values.effective(nodes), "versions": versions(),
     }
     if values.per_node:
-        meta["per_node_parameters"] = values.per_node
+        meta["per_node_parameters"] = {n: masked(v) for n, v in values.per_node.items()}
     return Plan(run_dir, args.learner, args.teacher, values, meta, run_dir / PARAMS,
-                run_dir / "logs", lock)
+                run_dir / "logs", lock, markers=not args.no_markers)
 
 
 def plan_resume(args: argparse.Namespace) -> Plan | None:
@@ -272,8 +335,10 @@ def plan_resume(args: argparse.Namespace) -> Plan | None:
         meta.setdefault("resumed", []).append(entry)
         meta.update(outcome=RUNNING, launcher_pid=os.getpid())
         args.learner, args.seed, args.movements = learner, meta["seed"], meta["movements"]
+        args.teacher = teacher
         return Plan(run_dir, learner, teacher, values, meta, run_dir / f"params.{segment.name}"
-                    ".yaml", run_dir / "logs" / segment.name, lock, done=state.recorded)
+                    ".yaml", run_dir / "logs" / segment.name, lock, done=state.recorded,
+                    markers=bool(meta.get("markers", True)))
     except BaseException:
         lock.release()
         raise
@@ -310,7 +375,7 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
     os.environ.update(env)  # the launcher's own progress node joins the run's domain
     meta["ros_domain_id"] = domain
     write_metadata(run_dir, meta)
-    timeout = args.timeout or default_timeout(args.movements)
+    timeout = args.timeout or default_timeout(args.movements, plan.teacher)
     say(f"{plan.learner}, seed {args.seed}, {args.movements} movements, domain {domain}, "
         f"{len(plan.nodes)} nodes, timeout {timeout:g} s -> {run_dir}")
     inherited = (plan.lock.fd, *([reservation.fd] if reservation else []))
@@ -329,9 +394,11 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
     supervisor = None
     with supervise.stop_signals() as shielded:
         try:
-            progress = supervise.Progress(args.movements, plan.done, args.quiet)
+            # The terminal teacher's prompt shows the count itself: no bar drawn over it.
+            progress = supervise.Progress(args.movements, plan.done,
+                                          args.quiet or plan.teacher == "human")
             supervisor = supervise.Supervisor(plan.nodes, start, plan.log_dir, timeout,
-                                              progress)
+                                              progress, address_file=plan.address_file)
             supervisor.start()
             arbiter_code = supervisor.watch()
             if arbiter_code != 0:
@@ -350,6 +417,8 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
             with shielded():
                 if progress is not None:
                     progress.spin(0.2)
+                if supervisor is not None:  # a prompt says goodbye by itself at the end
+                    supervisor.let_interactive_end(10.0 if code == 0 else 3.0)
                 group.stop_all()
                 group.close()
                 recorder = supervisor.procs.get(RECORDER) if supervisor else None

@@ -204,6 +204,10 @@ class Progress:
     def count(self) -> int:
         return max(self.seen, self.status_count)
 
+    def say(self, text: str) -> None:
+        """A line of the launcher's, above the progress bar."""
+        self.bar.write(f"run_experiment: {text}", file=OUT)
+
     def spin(self, seconds: float) -> None:
         deadline = time.monotonic() + seconds
         while time.monotonic() < deadline:
@@ -255,6 +259,7 @@ class Supervisor:
     log_dir: Path
     timeout: float
     progress: Progress
+    address_file: Path | None = None  # the web teacher's page address, said once it serves
     respawns: dict[str, int] = field(default_factory=dict)
     procs: dict[str, object] = field(default_factory=dict)
 
@@ -283,6 +288,9 @@ class Supervisor:
         arbiter = self.procs[ARBITER]
         while True:
             self.progress.spin(0.2)
+            if self.address_file is not None and self.address_file.exists():
+                self.progress.say(f"teach at {self.address_file.read_text().strip()}")
+                self.address_file = None
             if arbiter.poll() is not None or self.progress.over:
                 break
             for name, child in list(self.procs.items()):
@@ -310,6 +318,15 @@ class Supervisor:
                             f"final status; see {self.log_of(ARBITER)}") from None
         self.progress.spin(0.5)  # the last status may still be on its way
         return arbiter.returncode
+
+    def let_interactive_end(self, seconds: float) -> None:
+        """Give a terminal prompt (human_input) time to leave by itself once the run is over."""
+        specs = {spec.name: spec for spec in self.nodes}
+        deadline = time.monotonic() + seconds
+        for name, child in self.procs.items():
+            if specs[name].interactive:
+                while child.poll() is None and time.monotonic() < deadline:
+                    time.sleep(0.1)
 
     def wait_for_recorder(self) -> None:
         """The recorder ends by itself once it has written the end of the run; RunFailed if it
