@@ -1,13 +1,21 @@
 """The entry point every node of the graph shares, the base of nodes that await, and a
 bounded await.
 
-A node that cannot start (a bad parameter, a missing file) says why in one line and exits with
-code 2; Ctrl-C and external shutdown end it cleanly, and it is always destroyed.
+A node that cannot start (a bad parameter, an unknown parameter name, an unreadable parameter
+file, a missing file) says why in one line and exits with code 2; Ctrl-C and external shutdown
+end it cleanly, and it is always destroyed. A node started by the run launcher also ends when
+the launcher dies, however it dies (see `follow_launcher`).
 """
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
+import os
+import signal
 import sys
+import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -17,7 +25,14 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.task import Future
 
+from sgim_ros.command_line import check_command_line, read_parameter_file, ros_arguments
 from sgim_ros.params import ParameterError
+
+# The launcher passes the read end of a pipe whose write end only it holds: end of file on it
+# means the launcher is gone, whatever killed it (SIGKILL included).
+LAUNCHER_FD = "SGIM_LAUNCHER_FD"
+LAUNCHER_GRACE = 10.0  # seconds to end cleanly after the launcher died, then a hard exit
+_PR_SET_PDEATHSIG = 1
 
 
 class AsyncNode(Node):
@@ -59,11 +74,31 @@ def run_node(factory: Callable[[], Node], args: list[str] | None = None,
     setting `node.finished = True` (with `node.exit_code`). `refusals`: more exceptions that
     mean "cannot start with this configuration".
     """
-    rclpy.init(args=args)
+    argv = sys.argv if args is None else args
+    try:
+        for path in ros_arguments(argv)[1]:
+            read_parameter_file(path)  # rcl reads a file holding a plain string as "nothing"
+        rclpy.init(args=args)
+    except ParameterError as error:
+        print(f"[{factory.__name__}] {error}", file=sys.stderr, flush=True)
+        return 2
+    except Exception as error:  # rcl's own parse errors (RCLError): one line, not a traceback
+        print(f"[{factory.__name__}] {str(error).split(', at /')[0]}", file=sys.stderr,
+              flush=True)
+        return 2
+    if not follow_launcher():
+        print(f"[{factory.__name__}] its launcher is gone: not starting", file=sys.stderr,
+              flush=True)
+        rclpy.try_shutdown()
+        return 1
+    node = None
     try:
         node = factory()
+        check_command_line(node, argv)
     except (ParameterError, ValueError, FileNotFoundError, *refusals) as error:
         print(f"[{factory.__name__}] {error}", file=sys.stderr, flush=True)
+        if node is not None:
+            node.destroy_node()
         rclpy.try_shutdown()
         return 2
     executor = SingleThreadedExecutor()
@@ -78,3 +113,46 @@ def run_node(factory: Callable[[], Node], args: list[str] | None = None,
         node.destroy_node()
         rclpy.try_shutdown()
     return int(getattr(node, "exit_code", 0))
+
+
+def follow_launcher(grace: float = LAUNCHER_GRACE) -> bool:
+    """End this process when the launcher that started it dies, whatever the signal.
+
+    The kernel sends SIGINT when the parent dies (PR_SET_PDEATHSIG): the node shuts down as on
+    Ctrl-C, and the recorder closes its bag. A watchdog thread reads the launcher's pipe; at
+    its end of file it gives the node `grace` seconds to finish, then ends the process hard,
+    so a node that hangs on shutdown cannot outlive its run. False when the launcher is
+    already gone (it died while this process started): the caller should not start at all.
+    """
+    try:
+        fd = int(os.environ.get(LAUNCHER_FD, ""))
+        os.fstat(fd)
+    except (ValueError, OSError):
+        return True  # not started by the launcher (or the variable without its pipe)
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGINT, 0, 0, 0)
+    os.set_blocking(fd, False)  # did the launcher die before the signal was armed?
+    try:
+        if not os.read(fd, 64):
+            return False
+    except BlockingIOError:
+        pass
+    finally:
+        os.set_blocking(fd, True)
+
+    def watch() -> None:
+        while True:
+            try:
+                if not os.read(fd, 64):
+                    break  # every write end is closed: the launcher is gone
+            except InterruptedError:
+                continue
+            except OSError:
+                break
+        time.sleep(grace)
+        print(f"[{os.getpid()}] still running {grace:g} s after its launcher died: exiting",
+              file=sys.stderr, flush=True)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="launcher-watchdog", daemon=True).start()
+    return True

@@ -22,27 +22,15 @@ from sgim_msgs.msg import Movement
 from sgim_msgs.srv import ExecuteAction
 from sgim_ros import qos
 from sgim_ros.entry import run_node
-from sgim_ros.params import Param, declare, non_negative
+from sgim_ros.params import Bounds, Param, at_least, declare, non_negative
 from sim_bridge.fishing_world import DEFAULT_NOISE, DEFAULT_TIME_STEP, FishingWorld
 
-PARAMS = (
-    Param(
-        "seed",
-        0,
-        "seed of the motor-command noise; same seed, same outcomes",
-        lambda v: v >= 0,
-        ">= 0",
-    ),
-    Param(
-        "noise", DEFAULT_NOISE, "std of the noise added to the motor commands", non_negative, ">= 0"
-    ),
-    Param(
-        "time_step",
-        DEFAULT_TIME_STEP,
-        "physics time step in seconds",
-        lambda v: 0 < v <= 0.01,
-        "in (0, 0.01]",
-    ),
+PARAMS = (  # all read-only: they are the run's physics, recorded in its metadata
+    Param("seed", 0, "seed of the motor-command noise; same seed, same outcomes", at_least(0)),
+    Param("noise", DEFAULT_NOISE, "std of the noise added to the motor commands",
+          non_negative),
+    Param("time_step", DEFAULT_TIME_STEP, "physics time step in seconds",
+          Bounds(0.0, 0.01, low_open=True)),
     Param("wait_for_recorder", False, "serve execute_action only once the recorder hears the "
           "movements (a node restarted mid-run would otherwise lose its first records)"),
 )

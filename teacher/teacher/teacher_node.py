@@ -31,33 +31,31 @@ from sgim_nodes.core.teaching import (
 )
 from sgim_nodes.nodes.ros_glue import floats, run_node, vec
 from sgim_ros import qos
-from sgim_ros.params import Param, declare, non_negative, positive
+from sgim_ros.params import Param, at_least, declare, non_negative, positive
 from sim_bridge.data_files import load_teaching_set
 from sim_bridge.scaling import OUTCOME_NOISE
 
 OWN_CODES = {PROCESS_CODES[label] for label in OWN_PROCESSES}
+PARAMS = (
+    Param("seed", 0, "seed of the run (the teacher uses its stream 'teacher')", at_least(0)),
+    Param("demonstration_period", PAPER_PERIOD, "movements between demonstrations",
+          at_least(1)),
+    Param("tolerance_noise", DEFAULT_TOLERANCE_NOISE, "a teaching goal counts as reached "
+          "within this many units of the world's outcome noise", non_negative),
+    Param("outcome_noise", OUTCOME_NOISE, "the world's outcome noise (outcome units)",
+          positive),
+    Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one"),
+    Param("movements", 0, "the run's movement budget, to validate run statuses (0: unknown)",
+          non_negative),
+    Param("resume_from", "", "run folder to resume (see sgim_nodes/bag/resume.py)"),
+    Param("resume_segments", 0, "how many of its recordings to read (0: all)", at_least(0)),
+)
 
 
 class TeacherNode(Node):
     def __init__(self) -> None:
         super().__init__("teacher")
-        p = declare(self, (
-            Param("seed", 0, "seed of the run (the teacher uses its stream 'teacher')",
-                  lambda v: v >= 0, ">= 0"),
-            Param("demonstration_period", PAPER_PERIOD, "movements between demonstrations",
-                  lambda v: v >= 1, ">= 1"),
-            Param("tolerance_noise", DEFAULT_TOLERANCE_NOISE, "a teaching goal counts as "
-                  "reached within this many units of the world's outcome noise", non_negative,
-                  ">= 0"),
-            Param("outcome_noise", OUTCOME_NOISE, "the world's outcome noise (outcome units)",
-                  positive, "> 0"),
-            Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one"),
-            Param("movements", 0, "the run's movement budget, to validate run statuses "
-                  "(0: unknown)", non_negative, ">= 0"),
-            Param("resume_from", "", "run folder to resume (see sgim_nodes/bag/resume.py)"),
-            Param("resume_segments", 0, "how many of its recordings to read (0: all)",
-                  lambda v: v >= 0, ">= 0"),
-        ))
+        p = declare(self, PARAMS)
         ts = load_teaching_set(p["teaching_set"] or None)
         self.teacher = Teacher(ts.actions, ts.outcomes, component_rng(p["seed"], "teacher"),
                                p["demonstration_period"],

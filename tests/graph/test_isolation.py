@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -65,3 +67,59 @@ def test_process_group_lets_a_clean_child_exit_on_sigint():
         child = group.start("sleeper", [sys.executable, "-c", "import time; time.sleep(60)"])
         time.sleep(0.3)
     assert child.returncode is not None and child.returncode != -signal.SIGKILL
+
+
+OWNER = """
+import sys, time
+from sgim_nodes.graph.processes import ProcessGroup
+group = ProcessGroup()
+child = group.start("node", [sys.executable, "-c", sys.argv[1]])
+print(child.pid, flush=True)
+time.sleep(600)
+"""
+
+FOLLOWER = """
+import signal, sys, time
+from sgim_ros.entry import follow_launcher
+if {ignore}:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+assert follow_launcher(grace=2.0)
+print("following", flush=True)
+try:
+    time.sleep(600)
+except KeyboardInterrupt:
+    print("stopped cleanly", flush=True)
+"""
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return False
+    return state not in ("Z", "X")
+
+
+@pytest.mark.ros
+@pytest.mark.parametrize("ignores_sigint", [False, True])
+def test_a_node_ends_when_its_launcher_is_killed(tmp_path, ignores_sigint):
+    """SIGKILL leaves the launcher no chance to stop its nodes: they stop by themselves, on
+    the parent-death signal, or hard after a grace period if they ignore it."""
+    import subprocess
+
+    owner = subprocess.Popen([sys.executable, "-c", OWNER,
+                              FOLLOWER.format(ignore=ignores_sigint)],
+                             stdout=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        pid = int(owner.stdout.readline())
+        time.sleep(3.0)  # let it arm its signal and watchdog (python and rclpy imports)
+        assert _alive(pid)
+        os.kill(owner.pid, signal.SIGKILL)
+        owner.wait(timeout=10)
+        deadline = time.monotonic() + 30
+        while _alive(pid) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not _alive(pid), "the node outlived its launcher"
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(owner.pid, signal.SIGKILL)

@@ -6,6 +6,9 @@ import contextlib
 import os
 import signal
 import subprocess
+import sys
+import time
+import warnings
 from pathlib import Path
 
 import pytest
@@ -76,33 +79,58 @@ def test_a_killed_simulator_is_restarted_and_no_movement_is_lost_or_doubled(
 
 def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
         ros_processes, ros_domain, tmp_path, rclpy_context):
-    from sgim_msgs.msg import Movement
+    """Interrupted where it cannot have finished, whatever the machine's load: the teacher
+    never answers turn 100 (its node is replaced by a sleeper; this test gives turn 0's
+    word), so the arbiter waits at movement 100, and Ctrl-C comes once the bag holds it."""
+    from sgim_msgs.msg import Demonstration, RunStatus
+    from sgim_nodes.bag.reader import read_messages
     from sgim_nodes.bag.resume import load_run_folder, segments
     from sgim_ros import qos
     from tests.ros.graph_client import GraphClient
 
     client = GraphClient(rclpy_context, "interrupter")
-    seen = client.capture(Movement, "/movements", qos.RECORDS)
-    common = ["--domain", str(ros_domain), "--quiet", "--timeout", "240"]
+    status = client.capture(RunStatus, "/run_status", qos.RECORDS)
+    words = client.node.create_publisher(Demonstration, "/demonstrations", qos.RECORDS)
+    common = ["--domain", str(ros_domain), "--quiet", "--timeout", "600"]
+    silent_teacher = f"teacher={sys.executable} -c 'import time; time.sleep(3600)'"
     first = ros_processes.start(
         "run-interrupted",
         [RUN, "sgim-d", "--seed", "5", "--movements", "300", "--eval-every", "100",
-         "--period", "100", "--runs-dir", str(tmp_path), "--name", "cut", *common],
+         "--period", "100", "--runs-dir", str(tmp_path), "--name", "cut", *common,
+         "--param", "teacher_timeout=600.0", "--prefix", silent_teacher],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    assert client.spin_until(lambda: len(seen) >= 130, timeout=120)
+    # The arbiter and the recorder hear the word; the run has started.
+    assert client.spin_until(lambda: words.get_subscription_count() >= 2 and status,
+                             timeout=180)
+    words.publish(Demonstration(stamp=client.node.get_clock().now().to_msg(),
+                                movement_index=0, teaching_set_index=-1,
+                                source="automatic"))  # the teacher's "nothing to show"
+    cut = tmp_path / "cut"
+
+    def recorded() -> int:
+        """The highest movement the bag's finished parts hold (the open one is skipped)."""
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                return max((m.index for _, _, m in read_messages(cut / "bag", ["movements"])),
+                           default=0)
+            except Exception:  # no finished part yet
+                return 0
+
+    deadline = time.monotonic() + 300
+    while recorded() < 100:
+        assert time.monotonic() < deadline and first.poll() is None, "the run did not reach 100"
+        client.spin_for(0.5)
     first.send_signal(signal.SIGINT)  # Ctrl-C
     output, _ = first.communicate(timeout=120)
     client.close()
     assert first.returncode == 130, output[-3000:]
-    cut = tmp_path / "cut"
     before = load_run_folder(cut)
-    stopped_at = before.movements[-1].index
-    assert 130 <= stopped_at < 300 and [m.index for m in before.movements] == list(
-        range(1, stopped_at + 1))
+    assert [m.index for m in before.movements] == list(range(1, 101))
 
     second = ros_processes.start("run-resumed", [RUN, "--resume", str(cut), *common],
                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    output, _ = second.communicate(timeout=300)
+    output, _ = second.communicate(timeout=600)
     assert second.returncode == 0, output[-3000:]
     assert [p.name for p in segments(cut)] == ["bag", "bag.resume1"]
     run = load_run_folder(cut)

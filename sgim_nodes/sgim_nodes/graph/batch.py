@@ -24,6 +24,8 @@ from pathlib import Path
 import yaml
 
 from sgim_nodes.core.learners import LEARNER_NAMES
+from sgim_nodes.graph.processes import ProcessGroup
+from sgim_nodes.graph.run_folder import RunFolderError, RunLock
 
 REPO = Path(__file__).resolve().parents[3]
 RUN = REPO / "ros_ws" / "run_experiment.sh"
@@ -88,8 +90,14 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     return args
 
 
-def start(job: Job, args: argparse.Namespace) -> None:
+def start(job: Job, args: argparse.Namespace, group: ProcessGroup) -> bool:
+    """Start the run's launcher; False if its folder is in use by a launcher still alive."""
     if job.folder.exists():  # an unfinished run: start it again from scratch
+        try:
+            RunLock.take(job.folder).release()
+        except RunFolderError as error:
+            print(f"[study] {job.name} skipped: {error}", file=sys.stderr)
+            return False
         shutil.rmtree(job.folder)
     argv = [str(RUN), job.learner, "--seed", str(job.seed), "--movements", str(args.movements),
             "--eval-every", str(args.eval_every), "--runs-dir", str(args.runs_dir), "--name",
@@ -98,9 +106,10 @@ def start(job: Job, args: argparse.Namespace) -> None:
         argv += ["--param", item]
     args.runs_dir.mkdir(parents=True, exist_ok=True)
     job.log = open(args.runs_dir / f"{job.name}.launcher.log", "w")  # noqa: SIM115
-    job.process = subprocess.Popen(argv, stdout=job.log, stderr=subprocess.STDOUT,
-                                   start_new_session=True)
+    # The group's lifeline: if this study dies, however, its launchers stop their runs.
+    job.process = group.start(job.name, argv, stdout=job.log, stderr=subprocess.STDOUT)
     job.started = time.monotonic()
+    return True
 
 
 def report(jobs: list[Job], done: int, failed: list[str], total: int, movements: int,
@@ -125,12 +134,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     running: list[Job] = []
     failed: list[str] = []
     done = len(jobs) - len(todo)
+    group = ProcessGroup()
     try:
         while todo or running:
             while todo and len(running) < args.parallel:
                 job = todo.pop(0)
-                start(job, args)
-                running.append(job)
+                if start(job, args, group):
+                    running.append(job)
+                else:
+                    failed.append(job.name)
             for job in list(running):
                 if job.process.poll() is None:
                     continue
@@ -157,6 +169,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             except subprocess.TimeoutExpired:
                 job.process.kill()
         return 130
+    finally:
+        group.close()
     minutes = (time.monotonic() - began) / 60
     print(f"[study] {done}/{len(jobs)} runs finished in {minutes:.1f} min"
           + (f"; failed: {', '.join(failed)}" if failed else ""), file=sys.stderr)

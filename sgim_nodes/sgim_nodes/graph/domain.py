@@ -2,8 +2,9 @@
 
 Two graphs on one domain mix their topics, so every run and every test run takes its own.
 A domain is held by binding a loopback TCP port derived from it for as long as the
-reservation lives; the operating system frees it when the process dies, so a crashed run
-never leaks a reservation.
+reservation lives; the operating system frees it when the last process holding the socket
+dies, so a crashed run never leaks a reservation, and a run whose nodes inherited the socket
+keeps its domain until its last node is gone.
 """
 
 from __future__ import annotations
@@ -27,6 +28,12 @@ class DomainReservation:
 
     domain_id: int
     _socket: socket.socket = field(repr=False)
+
+    @property
+    def fd(self) -> int:
+        """The reservation's descriptor: a child process that inherits it holds the domain
+        until it ends too."""
+        return self._socket.fileno()
 
     def release(self) -> None:
         self._socket.close()

@@ -1,29 +1,35 @@
 """Run one learning experiment through the node graph and leave one bag per run.
 
-Starts every node of the graph as its own process (the way `ros2 run` does), in a ROS domain
-of its own with discovery kept on this host, shows the run's progress, waits for its end,
-stops every node cleanly and writes the run's metadata beside its bag:
+Starts every node of the graph (graph/description.py) as its own process, the way `ros2 run`
+does, in a ROS domain of its own with discovery kept on this host, shows the run's progress,
+waits for its end, stops every node cleanly and writes the run's metadata beside its bag:
 
     runs/<learner>-seed<N>-<time>/
         bag/            the rosbag2 recording (MCAP), every topic of the run
         params.yaml     the parameters every node was started with
-        metadata.yaml   learner, seed, parameters, versions, timing, how it ended
-        logs/           one log per node
+        metadata.yaml   learner, seed, every node's parameters, versions, timing, how it ended
+        logs/           one log per node, and the launcher's own
 
-Ctrl-C stops every node (the recorder closes its bag, which stays readable).
+Parameters are checked before any node starts. A run is reported finished only when the
+arbiter finished it and the recorder wrote all of it; anything else is `failed` with its
+reason, and a non-zero exit code. Ctrl-C (or SIGTERM, SIGHUP) stops every node, piped output
+or not; nodes also stop by themselves if this launcher is killed, and the run's domain and
+folder stay reserved until the last of them is gone.
+
+Exit codes: 0 finished, 1 failed or aborted, 2 refused (bad options, parameters or run
+folder), 128+N stopped by signal N (130: Ctrl-C).
 """
 
 from __future__ import annotations
 
 import argparse
-import contextlib
 import ipaddress
+import math
 import os
 import platform
 import secrets
-import signal
+import shlex
 import subprocess
-import sys
 import time
 from collections.abc import Sequence
 from datetime import UTC, datetime
@@ -32,25 +38,59 @@ from typing import Any
 
 import yaml
 
-from sgim_nodes.bag.resume import next_segment, segments
-from sgim_nodes.core.learners import GOAL_BABBLERS, LEARNER_NAMES
+from sgim_nodes.core.learners import LEARNER_NAMES
+from sgim_nodes.graph import supervise
+from sgim_nodes.graph.description import (
+    ARBITER,
+    RECORDER,
+    STORAGES,
+    TEACHERS,
+    NodeSpec,
+    RunOptions,
+    RunParameters,
+    check,
+    graph,
+    masked,
+    parameters,
+    unused,
+)
 from sgim_nodes.graph.domain import isolated_ros_environment, reserve_domain
+from sgim_nodes.graph.overrides import parse_assignments, read_parameter_files
 from sgim_nodes.graph.processes import ProcessGroup
+from sgim_nodes.graph.run_folder import (
+    METADATA,
+    PARAMS,
+    RUNNING,
+    RunFolderError,
+    RunLock,
+    check_resume,
+    read_metadata,
+    write_metadata,
+)
+from sgim_nodes.graph.supervise import Interrupted, RunFailed, say
+from sgim_ros.params import ParameterError
 
 REPO = Path(__file__).resolve().parents[3]
 ROS2RUN = REPO / "ros_ws" / "ros2run.sh"
-LEARNER_CONFIG = REPO / "sgim_nodes" / "config" / "learner.yaml"
-SOCIAL = ("sgim-d", "demo-only")
-# The simulator holds no learning state and its clients retry a call it never answered
-# (sim_client.py), so it is restarted when it dies; the other nodes hold the learner's memory,
-# tree or count, or serve calls that are not retried: losing one ends the run, clearly.
-RESPAWNED = ("sim_bridge",)
-MAX_RESPAWNS = 3
-# The arbiter only knows synchronous (automatic) and asynchronous (human) demonstrations.
-TEACHER_MODES = {"automatic": "automatic", "human": "human", "web": "human",
-                 "external": "human"}
+DEFAULTS = {"seed": 0, "movements": 5000, "eval_every": 250, "period": 150,
+            "teacher": "automatic", "storage": "mcap", "wait_for_teacher": 0.0,
+            "web_port": 8765, "web_host": "127.0.0.1", "web_token": "", "no_markers": False}
+# Options a resumed run takes from its folder: giving one with --resume is refused.
+RUN_OPTIONS = ("seed", "movements", "eval_every", "period", "teacher", "storage", "name",
+               "param", "params_file", "wait_for_teacher", "web_port", "web_host",
+               "web_token", "no_markers")
 FOREVER = ("forever", "inf", "-1")  # --wait-for-teacher values that mean "until it acts"
 WEB_TOKEN_MIN = 16  # the web teacher's own minimum (teacher.web.server.MIN_TOKEN)
+HUMAN_TIMEOUT = 24 * 3600.0  # a person teaches at a person's pace
+
+
+def default_timeout(movements: int, teacher: str = "automatic") -> float:
+    """Generous: a 5000-movement run takes about 2 minutes on 2 free cores; this allows 25
+    times that, and bounds a run whose every inner wait somehow failed to. A run taught by a
+    person may wait for them (--wait-for-teacher, pause): a day."""
+    if teacher in ("human", "web"):
+        return HUMAN_TIMEOUT
+    return 600.0 + 0.5 * movements
 
 
 def is_loopback(host: str) -> bool:
@@ -59,46 +99,6 @@ def is_loopback(host: str) -> bool:
         return host == "localhost" or ipaddress.ip_address(host).is_loopback
     except ValueError:
         return False
-
-
-def nodes_for(learner: str, teacher: str, markers: bool = True,
-              web: bool = False) -> list[tuple[str, str]]:
-    """(package, executable) of every node the learner needs, the arbiter last."""
-    nodes = [("sgim_nodes", "recorder"), ("sim_bridge", "sim_bridge"),
-             ("sgim_nodes", "evaluator")]
-    if markers:
-        nodes.append(("sgim_nodes", "markers"))
-    if learner in GOAL_BABBLERS:
-        nodes += [("sgim_nodes", "interest_computer"), ("sgim_nodes", "goal_generator"),
-                  ("sgim_nodes", "low_level_explorer")]
-    if learner in SOCIAL:
-        nodes.append(("sgim_nodes", "imitation"))
-        if teacher == "automatic":
-            nodes.append(("teacher", "teacher"))
-        elif web:
-            nodes.append(("teacher", "web_teacher"))
-    nodes.append(("sgim_nodes", "social_interaction"))
-    return nodes
-
-
-def parameters(args: argparse.Namespace, run_dir: Path) -> dict[str, Any]:
-    """Every node reads the same file: the learner defaults, then this run's choices."""
-    values = dict(yaml.safe_load(LEARNER_CONFIG.read_text())["/**"]["ros__parameters"])
-    for item in args.param:
-        name, _, text = item.partition("=")
-        if not name or not _:
-            raise SystemExit(f"--param expects NAME=VALUE, got {item!r}")
-        values[name] = yaml.safe_load(text)
-    values.update(learner=args.learner, seed=args.seed, movements=args.movements,
-                  eval_every=args.eval_every, demonstration_period=args.period,
-                  teacher=TEACHER_MODES[args.teacher] if args.learner in SOCIAL else "none",
-                  output=str(run_dir / "bag"), storage=args.storage,
-                  wait_for_teacher=args.wait_for_teacher,
-                  wait_for_recorder=True)  # records start only once the recorder hears them
-    if args.teacher == "web":
-        values.update(host=args.web_host, port=args.web_port, token=args.web_token,
-                      address_file=str(run_dir / "web_teacher.url"))
-    return values
 
 
 def wait_seconds(text: str) -> float:
@@ -137,60 +137,84 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         prog="ros_ws/run_experiment.sh",
         description="Run one learner through the ROS 2 node graph and record the run to a bag "
                     "in runs/. Example: ros_ws/run_experiment.sh sgim-d --seed 3 "
-                    "--movements 5000")
+                    "--movements 5000. Exit codes: 0 finished, 1 failed, 2 refused, "
+                    "130 Ctrl-C.")
     p.add_argument("learner", choices=LEARNER_NAMES, nargs="?",
                    help="which learner to run (not with --resume)")
     p.add_argument("--resume", type=Path, metavar="RUN_DIR",
-                   help="resume an interrupted run from its recordings, to its movement "
-                        "budget; the new recording goes beside the old ones (bag.resumeN)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the run (default: 0)")
-    p.add_argument("--movements", type=int, default=5000,
-                   help="movement budget; the paper's is 5000 (default: %(default)s)")
-    p.add_argument("--eval-every", type=int, default=250,
-                   help="movements between evaluations; paper 250 (default: %(default)s)")
-    p.add_argument("--period", type=int, default=150,
-                   help="movements between demonstrations; paper 150 (default: %(default)s)")
-    p.add_argument("--teacher", choices=("automatic", "human", "web", "external"),
-                   default="automatic",
-                   help="automatic: the teacher node, every --period movements; human: you, at "
-                        "the human_input prompt in this terminal; web: you, on the web_teacher "
-                        "page (its address is printed); external: no teacher node, "
-                        "demonstrations come from any other publisher at any time")
-    p.add_argument("--wait-for-teacher", type=wait_seconds, default=0.0, metavar="SECONDS",
+                   help="resume an interrupted or failed run from its recordings, to its "
+                        "movement budget; the new recording goes beside the old ones "
+                        "(bag.resumeN). The run keeps its own options and parameters")
+    p.add_argument("--seed", type=int, help="seed of the run (default: 0)")
+    p.add_argument("--movements", type=int,
+                   help="movement budget; the paper's is 5000 (default: 5000)")
+    p.add_argument("--eval-every", type=int,
+                   help="movements between evaluations; paper 250 (default: 250)")
+    p.add_argument("--period", type=int,
+                   help="movements between demonstrations; paper 150 (default: 150)")
+    p.add_argument("--teacher", choices=TEACHERS,
+                   help="automatic (default): the teacher node, every --period movements; "
+                        "human: you, at the human_input prompt in this terminal; web: you, on "
+                        "the web_teacher page (its address is printed); external: no teacher "
+                        "node, demonstrations come from any other publisher at any time")
+    p.add_argument("--wait-for-teacher", type=wait_seconds, metavar="SECONDS",
                    help="human or web teacher: stop every --period movements and wait this "
                         "long for a demonstration (0: never wait; 'forever': until the "
                         "teacher demonstrates or resumes). Default: 0")
-    p.add_argument("--web-port", type=int, default=8765,
-                   help="web teacher: the page's port (0: any free one; default %(default)s)")
-    p.add_argument("--web-host", default="127.0.0.1",
-                   help="web teacher: the interface to serve on (default: this machine only; "
-                        "another one needs an access token, generated unless --web-token)")
-    p.add_argument("--web-token", default="",
+    p.add_argument("--web-port", type=int,
+                   help="web teacher: the page's port (0: any free one; default 8765)")
+    p.add_argument("--web-host",
+                   help="web teacher: the interface to serve on (default: 127.0.0.1, this "
+                        "machine only; another one needs an access token, generated unless "
+                        "--web-token)")
+    p.add_argument("--web-token",
                    help="web teacher: the access token the page's address must carry")
-    p.add_argument("--no-markers", action="store_true",
+    p.add_argument("--no-markers", action="store_const", const=True,
                    help="do not start the markers node (MarkerArray topics for rviz2 and "
                         "Foxglove, recorded in the bag)")
     p.add_argument("--runs-dir", type=Path, default=REPO / "runs",
                    help="where the run folder is made (default: runs/)")
     p.add_argument("--name", help="run folder name (default: <learner>-seed<N>-<time>)")
-    p.add_argument("--storage", choices=("mcap", "sqlite3"), default="mcap",
-                   help="bag storage (default: mcap)")
+    p.add_argument("--storage", choices=STORAGES, help="bag storage (default: mcap)")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
-                   help="override any node parameter, e.g. --param goal_budget=20")
+                   help="set a node parameter, e.g. --param goal_budget=20 (VALUE is YAML); "
+                        "a name no node declares stops the run before it starts")
+    p.add_argument("--params-file", action="append", default=[], type=Path, metavar="FILE",
+                   help="a ROS parameter file: sections /** (every node) or a node's name, "
+                        "each holding ros__parameters; checked like --param, which wins")
+    p.add_argument("--prefix", action="append", default=[], metavar="NODE=COMMAND",
+                   help="start NODE under COMMAND, as a launch file's prefix does (e.g. "
+                        "--prefix 'sim_bridge=valgrind', --prefix 'recorder=prlimit "
+                        "--fsize=1000000')")
     p.add_argument("--domain", type=int, default=None,
                    help="use this ROS_DOMAIN_ID as it is, e.g. to join a graph from a test "
                         "(default: reserve a free one)")
-    p.add_argument("--timeout", type=float, default=0,
-                   help="abort the run after this many seconds (default: none)")
+    p.add_argument("--timeout", type=float, default=None,
+                   help="fail the run after this many seconds (> 0; default: 600 + 0.5 per "
+                        "movement, 3100 s for 5000 movements; a day with a human or web "
+                        "teacher)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     args = p.parse_args(argv)
     if (args.learner is None) == (args.resume is None):
         p.error("give a learner, or --resume RUN_DIR (not both)")
+    if args.resume is not None:
+        given = [f"--{name.replace('_', '-')}" for name in RUN_OPTIONS
+                 if getattr(args, name) not in (None, [])]
+        if given:
+            p.error(f"{', '.join(given)} cannot be given with --resume: a resumed run keeps "
+                    "the options and parameters it was started with")
+    for name, value in DEFAULTS.items():
+        if getattr(args, name) is None:
+            setattr(args, name, value)
     for name in ("movements", "period"):
         if getattr(args, name) < 1:
             p.error(f"--{name} must be >= 1")
     if args.seed < 0 or args.eval_every < 0:
         p.error("--seed and --eval-every must be >= 0")
+    if args.timeout is not None and not (args.timeout > 0 and math.isfinite(args.timeout)):
+        p.error(f"--timeout must be a number of seconds > 0, got {args.timeout:g}")
+    if args.domain is not None and not 0 <= args.domain <= 232:
+        p.error(f"--domain must be in 0..232, got {args.domain}")
     if not 0 <= args.web_port <= 65535:
         p.error("--web-port must be in 0..65535")
     if args.teacher == "web":
@@ -203,194 +227,235 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     return args
 
 
-class Progress:
-    """Follows run_status with a small rclpy node of the launcher's own."""
-
-    def __init__(self, total: int, quiet: bool) -> None:
-        import rclpy
-        from rclpy.executors import SingleThreadedExecutor
-        from rclpy.node import Node
-        from tqdm import tqdm
-
-        from sgim_msgs.msg import RunStatus
-        from sgim_ros import qos
-
-        self.rclpy = rclpy
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context)
-        self.node = Node("experiment_launcher", context=self.context)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
-        self.state: int | None = None
-        self.message = ""
-        self.bar = tqdm(total=total, disable=quiet, unit="mv", file=sys.stderr)
-        self.node.create_subscription(RunStatus, "run_status", self._on_status, qos.RECORDS)
-        self.finished_state = (RunStatus.STATE_FINISHED, RunStatus.STATE_ABORTED)
-        self.ok_state = RunStatus.STATE_FINISHED
-
-    def _on_status(self, msg) -> None:
-        self.bar.update(max(0, msg.movement_index - self.bar.n))
-        self.state, self.message = msg.state, msg.message
-
-    def spin(self, seconds: float) -> None:
-        deadline = time.monotonic() + seconds
-        while time.monotonic() < deadline:
-            self.executor.spin_once(timeout_sec=0.05)
-
-    def say(self, text: str) -> None:
-        """A line above the progress bar."""
-        self.bar.write(text, file=sys.stderr)
-
-    @property
-    def over(self) -> bool:
-        return self.state in self.finished_state
-
-    def close(self) -> None:
-        self.bar.close()
-        self.executor.shutdown()
-        self.node.destroy_node()
-        self.rclpy.try_shutdown(context=self.context)
+def prefixes(items: Sequence[str], nodes: Sequence[NodeSpec]) -> dict[str, list[str]]:
+    names = {spec.name for spec in nodes}
+    found = {}
+    for item in items:
+        name, sep, command = item.partition("=")
+        if not sep or not command.strip():
+            raise ParameterError(f"--prefix expects NODE=COMMAND, got {item!r}")
+        if name not in names:
+            raise ParameterError(f"--prefix {item!r}: no node '{name}' in this run (its "
+                                 f"nodes: {', '.join(sorted(names))})")
+        found[name] = shlex.split(command)
+    return found
 
 
-def prepare_resume(args: argparse.Namespace) -> tuple[Path, dict[str, Any], dict[str, Any],
-                                                        str] | None:
-    """The run folder, its parameters and metadata, and the new segment's name."""
-    run_dir = args.resume
+class Plan:
+    """What a launch will do: the run folder, its graph, its parameters and metadata."""
+
+    def __init__(self, run_dir: Path, learner: str, teacher: str, values: RunParameters,
+                 meta: dict[str, Any], params_file: Path, log_dir: Path, lock: RunLock,
+                 done: int = 0, markers: bool = True) -> None:
+        self.run_dir, self.learner, self.teacher = run_dir, learner, teacher
+        self.values, self.meta, self.params_file = values, meta, params_file
+        self.log_dir, self.lock, self.done = log_dir, lock, done
+        self.nodes = graph(learner, teacher, markers)
+        self.address_file = (Path(values.shared["address_file"])
+                             if values.shared.get("address_file") else None)
+
+
+def plan_new(args: argparse.Namespace) -> Plan:
+    """Check everything, then make and lock the run folder."""
+    files_shared, files_per_node, where = read_parameter_files(args.params_file)
+    assigned, assigned_where = parse_assignments(args.param)
+    stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
+    run_dir = args.runs_dir / (args.name or f"{args.learner}-seed{args.seed}-{stamp}")
+    options = RunOptions(args.learner, args.seed, args.movements, args.eval_every, args.period,
+                         args.teacher, str(run_dir / "bag"), args.storage,
+                         {**files_shared, **assigned}, markers=not args.no_markers,
+                         wait_for_teacher=args.wait_for_teacher, web_host=args.web_host,
+                         web_port=args.web_port, web_token=args.web_token,
+                         web_address_file=str(run_dir / "web_teacher.url"))
+    values = parameters(options, files_per_node, {**where, **assigned_where})
+    nodes = graph(args.learner, args.teacher, not args.no_markers)
+    for name in unused({**files_shared, **assigned}, nodes):
+        say(f"note: parameter '{name}' is not used by a {args.learner} run "
+            f"(teacher {args.teacher})")
     try:
-        meta = yaml.safe_load((run_dir / "metadata.yaml").read_text())
-        params = yaml.safe_load((run_dir / "params.yaml").read_text())["/**"]["ros__parameters"]
-    except (OSError, yaml.YAMLError, KeyError, TypeError) as error:
-        print(f"run_experiment: {run_dir} is not a run folder ({error})", file=sys.stderr)
-        return None
-    segment = next_segment(run_dir)
-    params.update(resume_from=str(run_dir), resume_segments=len(segments(run_dir)),
-                  output=str(segment))
-    args.learner, args.seed, args.movements = meta["learner"], meta["seed"], meta["movements"]
-    return run_dir, params, meta, segment.name
+        run_dir.mkdir(parents=True)
+    except FileExistsError:
+        raise RunFolderError(f"{run_dir} exists; choose another --name, or --resume it") \
+            from None
+    lock = RunLock.take(run_dir)
+    meta = {
+        "learner": args.learner, "seed": args.seed, "movements": args.movements,
+        "teacher": values.shared["teacher"], "teacher_mode": args.teacher,
+        "markers": not args.no_markers,
+        "started": datetime.now(UTC).isoformat(), "outcome": RUNNING,
+        "launcher_pid": os.getpid(), "parameters": masked(values.shared),
+        "node_parameters": values.effective(nodes), "versions": versions(),
+    }
+    if values.per_node:
+        meta["per_node_parameters"] = {n: masked(v) for n, v in values.per_node.items()}
+    return Plan(run_dir, args.learner, args.teacher, values, meta, run_dir / PARAMS,
+                run_dir / "logs", lock, markers=not args.no_markers)
 
 
-def _interrupt(*_: object) -> None:
-    raise KeyboardInterrupt
+def plan_resume(args: argparse.Namespace) -> Plan | None:
+    """Check the folder and its recordings; None when there is nothing left to do."""
+    from sgim_nodes.bag.resume import next_segment, segments
+
+    run_dir = args.resume
+    meta = read_metadata(run_dir)
+    lock = RunLock.take(run_dir)
+    try:
+        try:
+            values = RunParameters.from_yaml(yaml.safe_load((run_dir / PARAMS).read_text()))
+        except (OSError, yaml.YAMLError, KeyError, TypeError, AttributeError) as error:
+            raise RunFolderError(f"cannot resume {run_dir}: its {PARAMS} is missing or is not "
+                                 f"a parameter file written by run_experiment ({error})") \
+                from None
+        learner, teacher = meta["learner"], meta.get("teacher_mode") or (
+            "automatic" if values.shared.get("teacher") == "automatic" else "external")
+        if meta.get("outcome") == RUNNING:
+            say(f"note: the last launcher of {run_dir} (pid {meta.get('launcher_pid', '?')}) "
+                "ended without recording an outcome: it was killed")
+        state = check_resume(run_dir, meta)
+        if state.complete and meta.get("outcome") == "finished":
+            say(f"{run_dir} already finished ({state.recorded} movements recorded); nothing "
+                "to resume")
+            lock.release()
+            return None
+        if state.lost:
+            first, last = state.lost
+            say(f"the recordings of {run_dir} end at movement {state.recorded}, but the run "
+                f"made {state.claimed} ({METADATA}, outcome "
+                f"{str(meta.get('outcome', 'unknown')).split(':')[0]}): "
+                f"movements {first}..{last} were lost. The resumed run carries on from "
+                f"movement {state.recorded}, where the recordings end, so they are made again")
+        segment = next_segment(run_dir)
+        shared = dict(values.shared, resume_from=str(run_dir),
+                      resume_segments=len(segments(run_dir)), output=str(segment))
+        values = RunParameters(check(shared), values.per_node)
+        entry = {"segment": segment.name, "at": datetime.now(UTC).isoformat(),
+                 "from_movement": state.recorded}
+        if state.lost:
+            entry["lost_movements"] = list(state.lost)
+        meta.setdefault("resumed", []).append(entry)
+        meta.update(outcome=RUNNING, launcher_pid=os.getpid())
+        args.learner, args.seed, args.movements = learner, meta["seed"], meta["movements"]
+        args.teacher = teacher
+        return Plan(run_dir, learner, teacher, values, meta, run_dir / f"params.{segment.name}"
+                    ".yaml", run_dir / "logs" / segment.name, lock, done=state.recorded,
+                    markers=bool(meta.get("markers", True)))
+    except BaseException:
+        lock.release()
+        raise
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.resume is not None:
-        prepared = prepare_resume(args)
-        if prepared is None:
-            return 2
-        run_dir, params, meta, segment = prepared
-        if meta.get("outcome") == "finished":
-            print(f"run_experiment: {run_dir} already finished; nothing to resume",
-                  file=sys.stderr)
+    try:
+        plan = plan_resume(args) if args.resume is not None else plan_new(args)
+        if plan is None:
             return 0
-        params_file = run_dir / f"params.{segment}.yaml"
-        log_dir = run_dir / "logs" / segment
-        meta.setdefault("resumed", []).append(
-            {"segment": segment, "at": datetime.now(UTC).isoformat()})
-    else:
-        stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
-        run_dir = args.runs_dir / (args.name or f"{args.learner}-seed{args.seed}-{stamp}")
-        if run_dir.exists():
-            print(f"run_experiment: {run_dir} exists; choose another --name, or --resume it",
-                  file=sys.stderr)
-            return 2
-        params, meta = parameters(args, run_dir), {}
-        params_file, log_dir = run_dir / "params.yaml", run_dir / "logs"
-    log_dir.mkdir(parents=True, exist_ok=True)
-    params_file.write_text(yaml.safe_dump({"/**": {"ros__parameters": params}}))
+    except (RunFolderError, ParameterError) as error:
+        for line in str(error).splitlines():
+            say(line)
+        return 2
+    try:
+        return launch(args, plan)
+    finally:
+        plan.lock.release()
+
+
+def launch(args: argparse.Namespace, plan: Plan) -> int:
+    try:
+        node_prefix = prefixes(args.prefix, plan.nodes)
+    except ParameterError as error:
+        say(str(error))
+        return 2
+    run_dir, meta = plan.run_dir, plan.meta
+    plan.log_dir.mkdir(parents=True, exist_ok=True)
+    supervise.OUT.log = open(plan.log_dir / "launcher.log", "a")  # noqa: SIM115
+    plan.params_file.write_text(yaml.safe_dump(plan.values.to_yaml(), sort_keys=False))
     reservation = reserve_domain() if args.domain is None else None
     domain = args.domain if reservation is None else reservation.domain_id
     env = isolated_ros_environment(domain)
     os.environ.update(env)  # the launcher's own progress node joins the run's domain
-    meta = meta or {
-        "learner": args.learner, "seed": args.seed, "movements": args.movements,
-        "teacher": params["teacher"], "ros_domain_id": domain,
-        "started": datetime.now(UTC).isoformat(), "parameters": params, "versions": versions(),
-    }
-    (run_dir / "metadata.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
-    web = args.teacher == "web" and args.learner in SOCIAL
-    nodes = nodes_for(args.learner, params["teacher"], markers=not args.no_markers, web=web)
-    print(f"run_experiment: {args.learner}, seed {args.seed}, {args.movements} movements, "
-          f"domain {domain}, {len(nodes)} nodes -> {run_dir}", file=sys.stderr)
-    group = ProcessGroup(env=env, log_dir=log_dir)
-    progress = human = None
-    respawns: dict[str, int] = {}
-    outcome, code = "unknown", 1
+    meta["ros_domain_id"] = domain
+    write_metadata(run_dir, meta)
+    timeout = args.timeout or default_timeout(args.movements, plan.teacher)
+    say(f"{plan.learner}, seed {args.seed}, {args.movements} movements, domain {domain}, "
+        f"{len(plan.nodes)} nodes, timeout {timeout:g} s -> {run_dir}")
+    inherited = (plan.lock.fd, *([reservation.fd] if reservation else []))
+    group = ProcessGroup(env=env, log_dir=plan.log_dir, inherited_fds=inherited)
+
+    def start(spec: NodeSpec, log_name: str) -> subprocess.Popen:
+        argv = [*node_prefix.get(spec.name, []), str(ROS2RUN), spec.package, spec.executable,
+                "--ros-args", "--params-file", str(plan.params_file)]
+        if spec.interactive:  # the prompt needs this terminal
+            return group.start(log_name, argv, new_session=False, stdout=None, stderr=None)
+        return group.start(log_name, argv)
+
+    progress = None
+    outcome, code = "failed: the launcher stopped before the run started", 1
     started = time.monotonic()
-    interrupted = False
-    previous = signal.signal(signal.SIGTERM, _interrupt)  # SIGTERM stops a run as Ctrl-C does
-    try:
-        # The terminal teacher's prompt shows the count itself: no bar drawn over it.
-        progress = Progress(args.movements, args.quiet or args.teacher == "human")
-        packages = dict((exe, pkg) for pkg, exe in nodes)
-
-        def launch(executable: str, log_name: str) -> subprocess.Popen:
-            return group.start(log_name, [str(ROS2RUN), packages[executable], executable,
-                                          "--ros-args", "--params-file", str(params_file)])
-
-        procs = {exe: launch(exe, exe) for _, exe in nodes}
-        if args.teacher == "human" and args.learner in SOCIAL:
-            human = subprocess.Popen([str(ROS2RUN), "teacher", "human_input", "--ros-args",
-                                      "--params-file", str(params_file)], env=env)
-        arbiter, recorder = procs["social_interaction"], procs["recorder"]
-        address = run_dir / "web_teacher.url" if web else None
-        while True:
-            progress.spin(0.2)
-            if address is not None and address.exists():
-                progress.say(f"run_experiment: teach at {address.read_text().strip()}")
-                address = None
-            if arbiter.poll() is not None or progress.over:
-                break
-            if recorder.poll() is not None:
-                raise RuntimeError(f"the recorder stopped (exit {recorder.returncode}); see "
-                                   f"{run_dir / 'logs' / 'recorder.log'}")
-            for exe, child in list(procs.items()):
-                if child.poll() is None or child in (arbiter, recorder):
-                    continue
-                if exe not in RESPAWNED or respawns.get(exe, 0) >= MAX_RESPAWNS:
-                    raise RuntimeError(f"node {exe} stopped (exit {child.returncode}); see "
-                                       f"{run_dir / 'logs' / exe}.log")
-                respawns[exe] = respawns.get(exe, 0) + 1
-                print(f"run_experiment: {exe} stopped (exit {child.returncode}); restarting "
-                      f"it ({respawns[exe]}/{MAX_RESPAWNS})", file=sys.stderr)
-                procs[exe] = launch(exe, f"{exe}.restart{respawns[exe]}")
-            if args.timeout and time.monotonic() - started > args.timeout:
-                raise RuntimeError(f"timed out after {args.timeout:g} s")
-        arbiter.wait(timeout=60)
-        progress.spin(0.5)  # the last status may still be on its way
-        # The arbiter's exit code is the truth (0: finished); its status says why not.
-        code = 0 if arbiter.returncode == 0 else 1
-        outcome = "finished" if code == 0 else (
-            f"aborted: {progress.message or f'arbiter exit code {arbiter.returncode}'}")
-        # the recorder ends by itself once it has written the end of the run
-        with contextlib.suppress(subprocess.TimeoutExpired):
-            recorder.wait(timeout=30)
-    except KeyboardInterrupt:
-        interrupted, outcome, code = True, "interrupted by the user", 130
-    except RuntimeError as error:
-        outcome, code = f"failed: {error}", 1
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-        if progress is not None:
-            progress.close()
-        if human is not None:  # the prompt says goodbye by itself once the run is over
-            with contextlib.suppress(subprocess.TimeoutExpired):
-                human.wait(timeout=10 if code == 0 else 3)
-        group.stop_all()
-        if human is not None and human.poll() is None:
-            human.terminate()
-        if reservation is not None:
-            reservation.release()
-        meta.update(ended=datetime.now(UTC).isoformat(), outcome=outcome, restarts=respawns,
-                    duration_s=round(time.monotonic() - started, 2))
-        (run_dir / "metadata.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
-    print(f"run_experiment: {outcome}; bag and metadata in {run_dir}"
-          + (" (interrupted: the bag holds what was recorded)" if interrupted else ""),
-          file=sys.stderr)
+    supervisor = None
+    with supervise.stop_signals() as shielded:
+        try:
+            # The terminal teacher's prompt shows the count itself: no bar drawn over it.
+            progress = supervise.Progress(args.movements, plan.done,
+                                          args.quiet or plan.teacher == "human")
+            supervisor = supervise.Supervisor(plan.nodes, start, plan.log_dir, timeout,
+                                              progress, address_file=plan.address_file)
+            supervisor.start()
+            arbiter_code = supervisor.watch()
+            if arbiter_code != 0:
+                why = (progress.message if progress.over else "") or supervise.log_reason(
+                    supervisor.log_of(ARBITER)) or "the arbiter ended"
+                raise RunFailed(f"aborted: {why} (arbiter exit code {arbiter_code}; see "
+                                f"{supervisor.log_of(ARBITER)})")
+            supervisor.wait_for_recorder()
+            outcome, code = "finished", 0
+        except Interrupted as stop:
+            outcome, code = f"interrupted by {stop}", 128 + stop.signum
+        except RunFailed as error:
+            outcome, code = (str(error) if str(error).startswith("aborted") else
+                             f"failed: {error}"), 1
+        finally:
+            with shielded():
+                if progress is not None:
+                    progress.spin(0.2)
+                if supervisor is not None:  # a prompt says goodbye by itself at the end
+                    supervisor.let_interactive_end(10.0 if code == 0 else 3.0)
+                group.stop_all()
+                group.close()
+                recorder = supervisor.procs.get(RECORDER) if supervisor else None
+                if code == 0 and recorder is not None and recorder.returncode != 0:
+                    outcome = f"failed: {supervisor.failure(RECORDER, recorder.returncode)}"
+                    code = 1
+                if reservation is not None:
+                    reservation.release()
+                if code > 128:  # the count once the last messages are in
+                    outcome += f" at movement {progress.count if progress else plan.done}"
+                meta.update(ended=datetime.now(UTC).isoformat(), outcome=outcome,
+                            exit_code=code, movements_done=progress.count if progress else
+                            plan.done, restarts=supervisor.respawns if supervisor else {},
+                            duration_s=round(time.monotonic() - started, 2))
+                meta.pop("launcher_pid", None)
+                meta["quarantine"] = quarantine(run_dir)
+                write_metadata(run_dir, meta)
+                if progress is not None:
+                    progress.close()
+    say(f"{outcome}; bag and {METADATA} in {run_dir}"
+        + (" (interrupted: the bag holds what was recorded; --resume carries on)"
+           if code > 128 else ""))
     return code
 
 
+def quarantine(run_dir: Path) -> dict[str, Any]:
+    """The recorders' reports of records they refused, summed over the run's segments."""
+    from sgim_nodes.bag.run_folder import quarantine_summary
+
+    try:
+        return quarantine_summary(run_dir)
+    except Exception as error:  # the metadata is written whatever the reports hold
+        return {"unreadable": str(error)}
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    supervise.watch_owner()
     return run(parse_args(argv))
 
 

@@ -3,6 +3,12 @@
 rclpy processes can hang on SIGTERM, and a process left behind keeps publishing into the next
 run. Each child gets its own process group; stopping sends SIGINT (rclpy's clean shutdown),
 then SIGTERM, then SIGKILL to the whole group, each after a bounded wait.
+
+The owner may also die without stopping them (SIGKILL, a crash). Every child therefore gets
+the read end of a pipe whose write end only the owner holds, named by SGIM_LAUNCHER_FD: nodes
+(sgim_ros.entry.follow_launcher) arm a parent-death signal and watch the pipe, so they end when
+their owner ends, however. Children also inherit `inherited_fds` (the run's domain reservation
+and folder lock), so those stay held for as long as any child lives.
 """
 
 from __future__ import annotations
@@ -16,6 +22,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+LAUNCHER_FD = "SGIM_LAUNCHER_FD"  # sgim_ros.entry reads it
+
 
 @dataclass
 class ProcessGroup:
@@ -24,16 +32,29 @@ class ProcessGroup:
     env: dict[str, str] | None = None
     log_dir: Path | None = None
     children: list[subprocess.Popen] = field(default_factory=list)
+    inherited_fds: tuple[int, ...] = ()
+    _lifeline: tuple[int, int] | None = field(default=None, repr=False)
+    _leaders: set[int] = field(default_factory=set, repr=False)  # children leading a group
 
-    def start(self, name: str, argv: Sequence[str], **popen_kwargs) -> subprocess.Popen:
-        """Start argv in a new session; its output goes to log_dir/name.log when log_dir is set."""
+    def start(self, name: str, argv: Sequence[str], new_session: bool = True,
+              **popen_kwargs) -> subprocess.Popen:
+        """Start argv (in a new session unless told otherwise: a terminal program stays in the
+        terminal's); its output goes to log_dir/name.log when log_dir is set."""
         if self.log_dir is not None and "stdout" not in popen_kwargs:
             self.log_dir.mkdir(parents=True, exist_ok=True)
             log = open(self.log_dir / f"{name}.log", "wb")  # noqa: SIM115 - owned by the child
             popen_kwargs.setdefault("stdout", log)
             popen_kwargs.setdefault("stderr", subprocess.STDOUT)
-        child = subprocess.Popen(list(argv), env=self.env, start_new_session=True, **popen_kwargs)
+        if self._lifeline is None:
+            self._lifeline = os.pipe()  # both ends close-on-exec: children get the read end
+        env = dict(os.environ if self.env is None else self.env)
+        env[LAUNCHER_FD] = str(self._lifeline[0])
+        child = subprocess.Popen(list(argv), env=env, start_new_session=new_session,
+                                 pass_fds=(self._lifeline[0], *self.inherited_fds),
+                                 **popen_kwargs)
         self.children.append(child)
+        if new_session:
+            self._leaders.add(child.pid)
         return child
 
     def stop_all(self, grace: float = 5.0) -> list[int]:
@@ -43,28 +64,42 @@ class ProcessGroup:
             if not alive:
                 break
             for child in alive:
-                _signal_group(child, sig)
+                _signal(child, sig, child.pid in self._leaders)
             for child in alive:
                 with contextlib.suppress(subprocess.TimeoutExpired):
                     child.wait(timeout=wait)
         # A child may have exited while its own children live on: clean the groups too.
-        for child in self.children:
-            _signal_group(child, signal.SIGKILL)
+        leaders = [c for c in self.children if c.pid in self._leaders]
+        for child in leaders:
+            _signal(child, signal.SIGKILL, True)
         deadline = time.monotonic() + grace
-        while time.monotonic() < deadline and not all(group_is_empty(c.pid) for c in self.children):
+        while time.monotonic() < deadline and not all(group_is_empty(c.pid) for c in leaders):
             time.sleep(0.02)
         return [c.returncode for c in self.children]
+
+    def close(self) -> None:
+        """Close the lifeline: children still alive learn that their owner is gone."""
+        if self._lifeline is not None:
+            for fd in self._lifeline:
+                with contextlib.suppress(OSError):
+                    os.close(fd)
+            self._lifeline = None
 
     def __enter__(self) -> ProcessGroup:
         return self
 
     def __exit__(self, *exc: object) -> None:
         self.stop_all()
+        self.close()
 
 
-def _signal_group(child: subprocess.Popen, sig: int) -> None:
+def _signal(child: subprocess.Popen, sig: int, whole_group: bool) -> None:
+    """Signal the child's process group (it leads its own), or the child alone."""
     with contextlib.suppress(ProcessLookupError, PermissionError):
-        os.killpg(child.pid, sig)
+        if whole_group:
+            os.killpg(child.pid, sig)
+        elif child.poll() is None:
+            child.send_signal(sig)
 
 
 def group_members(pgid: int) -> list[int]:

@@ -30,24 +30,33 @@ from sgim_nodes.core.evaluator import EVALUATION_SEED_OFFSET, Evaluator
 from sgim_nodes.core.inverse_model import InverseModel
 from sgim_nodes.core.learners import inverse_model_for, inverse_or_centre
 from sgim_nodes.nodes.movement_memory import MovementMemory
-from sgim_nodes.nodes.ros_glue import declare_learner, floats, run_node, vec, world_scale
+from sgim_nodes.nodes.ros_glue import (
+    declare_learner,
+    floats,
+    learner_node_params,
+    run_node,
+    vec,
+    world_scale,
+)
 from sgim_ros import qos
 from sgim_ros.params import Param, non_negative
 from sim_bridge.data_files import load_benchmark_goals
 from sim_bridge.fishing_world import DEFAULT_NOISE, FishingWorld
 
+PARAMS = learner_node_params(
+    Param("eval_every", 250, "movements between evaluations (paper: 250); 0 = only at the "
+          "start and the end", non_negative),
+    Param("noise", DEFAULT_NOISE, "motor-command noise of the evaluator's own world",
+          non_negative),
+    Param("movements", 0, "the run's movement budget, evaluated at its end (0: take it from "
+          "the run status)", non_negative),
+)
+
 
 class EvaluatorNode(Node):
     def __init__(self) -> None:
         super().__init__("evaluator")
-        values, config = declare_learner(self, (
-            Param("eval_every", 250, "movements between evaluations (paper: 250); 0 = only at "
-                  "the start and the end", non_negative, ">= 0"),
-            Param("noise", DEFAULT_NOISE, "motor-command noise of the evaluator's own world",
-                  non_negative, ">= 0"),
-            Param("movements", 0, "the run's movement budget, evaluated at its end (0: take it "
-                  "from the run status)", non_negative, ">= 0"),
-        ))
+        values, config = declare_learner(self, PARAMS)
         self.every = values["eval_every"]
         self.action_size = values["action_size"]
         goals = load_benchmark_goals()

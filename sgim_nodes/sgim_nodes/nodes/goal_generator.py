@@ -29,6 +29,7 @@ from sgim_nodes.nodes.ros_glue import (
     AsyncNode,
     declare_learner,
     floats,
+    learner_node_params,
     run_node,
     snapshot_from_msg,
     world_scale,
@@ -38,15 +39,16 @@ from sgim_ros.entry import first_of
 from sgim_ros.params import Param, positive
 
 MODE_CODES = {1: Goal.MODE_INTEREST_REGION, 2: Goal.MODE_UNIFORM, 3: Goal.MODE_LEAST_COMPETENT}
+PARAMS = learner_node_params(
+    Param("map_timeout", 60.0, "seconds to wait for a region map that reflects the requested "
+          "number of goals", positive),
+)
 
 
 class GoalGenerator(AsyncNode):
     def __init__(self) -> None:
         super().__init__("goal_generator")
-        values, c = declare_learner(self, (
-            Param("map_timeout", 60.0, "seconds to wait for a region map that reflects the "
-                  "requested number of goals", positive, "> 0"),
-        ))
+        values, c = declare_learner(self, PARAMS)
         self.timeout = values["map_timeout"]
         self.rng = component_rng(values["seed"], "goals")
         self.probabilities = goal_mode_probabilities(c, values["learner"])

@@ -30,17 +30,20 @@ from sgim_nodes.nodes.ros_glue import (
     check_vector,
     declare_learner,
     floats,
+    learner_node_params,
     run_node,
     vec,
 )
-from sgim_nodes.nodes.sim_client import SERVICE_TIMEOUT, SimClient
+from sgim_nodes.nodes.sim_client import SIM_CLIENT_PARAMS, SimClient
 from sgim_ros import qos
+
+PARAMS = learner_node_params(*SIM_CLIENT_PARAMS)
 
 
 class ImitationNode(AsyncNode):
     def __init__(self) -> None:
         super().__init__("imitation")
-        values, self.config = declare_learner(self, (SERVICE_TIMEOUT,))
+        values, self.config = declare_learner(self, PARAMS)
         self.action_size, self.outcome_size = values["action_size"], values["outcome_size"]
         self.rng = component_rng(values["seed"], "imitation")
         # Valid movements only (bag/validation.py): the run's count, to refuse a job that
@@ -51,7 +54,7 @@ class ImitationNode(AsyncNode):
             self.gate.movements.count = resume_point(
                 values["resume_from"], self.config, values["resume_segments"]).count
         self.create_subscription(Movement, "movements", self.gate.admit_movement, qos.RECORDS)
-        self.sim = SimClient(self, values["service_timeout"])
+        self.sim = SimClient(self, values)
         self.jobs = JobServer(self, Imitate, "imitate", self._run)
 
     async def _run(self, handle) -> Imitate.Result:

@@ -21,14 +21,23 @@ from sgim_nodes.bag.validation import Limits, LiveGate
 from sgim_nodes.core.learners import region_tree_for
 from sgim_nodes.core.region_snapshot import RegionIds, snapshot
 from sgim_nodes.core.region_tree import RegionTree
-from sgim_nodes.nodes.ros_glue import declare_learner, region_map_msg, run_node, vec, world_scale
+from sgim_nodes.nodes.ros_glue import (
+    declare_learner,
+    learner_node_params,
+    region_map_msg,
+    run_node,
+    vec,
+    world_scale,
+)
 from sgim_ros import qos
+
+PARAMS = learner_node_params()
 
 
 class InterestComputer(Node):
     def __init__(self) -> None:
         super().__init__("interest_computer")
-        values, c = declare_learner(self)
+        values, c = declare_learner(self, PARAMS)
         self.outcome_size = values["outcome_size"]
         self.tree: RegionTree = region_tree_for(c, world_scale(values))
         self.ids = RegionIds()

@@ -34,20 +34,21 @@ from sgim_nodes.nodes.ros_glue import (
     check_vector,
     declare_learner,
     floats,
+    learner_node_params,
     run_node,
     vec,
     world_scale,
 )
-from sgim_nodes.nodes.sim_client import SERVICE_TIMEOUT, SimClient
+from sgim_nodes.nodes.sim_client import SIM_CLIENT_PARAMS, SimClient
 from sgim_ros import qos
+
+PARAMS = learner_node_params(*SIM_CLIENT_PARAMS)
 
 
 class LowLevelExplorer(AsyncNode):
     def __init__(self) -> None:
         super().__init__("low_level_explorer")
-        values, self.config = declare_learner(self, (
-            SERVICE_TIMEOUT,
-        ))
+        values, self.config = declare_learner(self, PARAMS)
         self.action_size, self.outcome_size = values["action_size"], values["outcome_size"]
         self.rng = component_rng(values["seed"], "explorer")
         self.scale = world_scale(values)
@@ -57,7 +58,7 @@ class LowLevelExplorer(AsyncNode):
         if values["resume_from"]:
             self.memory.resume(resume_point(values["resume_from"], self.config,
                                  values["resume_segments"]))
-        self.sim = SimClient(self, values["service_timeout"])
+        self.sim = SimClient(self, values)
         self._competences = self.create_publisher(Competence, "competences", qos.RECORDS)
         self.create_service(RegisterDemonstration, "register_demonstration", self._register)
         self.jobs = JobServer(self, ReachGoal, "reach_goal", self._attempt)

@@ -50,7 +50,7 @@ from sgim_nodes.bag.validation import LIMITS_KEY, Limits, RunValidator, teaching
 from sgim_nodes.bag.writer import STORAGES, BagWriteError, BagWriter
 from sgim_ros import qos
 from sgim_ros.entry import run_node
-from sgim_ros.params import Param, declare, non_negative, one_of, positive
+from sgim_ros.params import Param, at_least, declare, non_negative, one_of, positive
 
 FINISH_LIMIT = 30.0  # seconds after the final status at which the recorder stops regardless
 WRITE_FAILED = 3  # exit code: the bag could not be written (the launcher fails the run)
@@ -58,23 +58,22 @@ LOGGED_QUARANTINES = 20  # quarantined records logged one by one; then counted o
 PARAMS = (
     Param("output", "", "bag directory to create", lambda v: bool(v.strip()),
           "a path that does not exist yet"),
-    Param("storage", "mcap", "storage format of the bag", one_of(*STORAGES),
-          f"one of {', '.join(STORAGES)}"),
+    Param("storage", "mcap", "storage format of the bag", one_of(*STORAGES)),
     Param("chunk_seconds", 0.5, "the open chunk is closed and flushed at least this often "
-          "while messages arrive (worst-case loss on SIGKILL, in time)", positive, "> 0"),
+          "while messages arrive (worst-case loss on SIGKILL, in time)", positive),
     Param("chunk_messages", 250, "the open chunk is closed and flushed after this many "
-          "messages (worst-case loss on SIGKILL, in messages)", lambda v: v >= 1, ">= 1"),
+          "messages (worst-case loss on SIGKILL, in messages)", at_least(1)),
     Param("stop_on_finish", True, "close the bag and exit 0 after a valid FINISHED or ABORTED "
           "run status, once the movements up to its count are recorded"),
     Param("finish_grace", 1.0, "seconds without messages after the final run status before "
           f"exiting, so that trailing messages are recorded (at most {FINISH_LIMIT:.0f} s)",
-          positive, "> 0"),
+          positive),
     # The run's limits, to validate records as every reader will (the shared parameter file
     # gives the run's own; 0 = unknown, that check is skipped).
     Param("movements", 0, "the run's movement budget, to validate indices (0: unknown)",
-          non_negative, ">= 0"),
-    Param("action_size", 24, "numbers per action", lambda v: v >= 1, ">= 1"),
-    Param("outcome_size", 2, "numbers per outcome", lambda v: v >= 1, ">= 1"),
+          non_negative),
+    Param("action_size", 24, "numbers per action", at_least(1)),
+    Param("outcome_size", 2, "numbers per outcome", at_least(1)),
     Param("teaching_set", "", "the teacher's teaching-set file (empty: the packaged one), to "
           "validate teaching-set indices"),
 )

@@ -15,13 +15,13 @@ from rclpy.node import Node
 
 from sgim_msgs.msg import Region, RegionMap
 from sgim_nodes.bag.validation import vector_problem
-from sgim_nodes.core.config import LearnerConfig
+from sgim_nodes.core.config import INVERSE_MODELS, OPTIMISERS, LearnerConfig
 from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS  # noqa: F401 - for nodes
 from sgim_nodes.core.learners import LEARNER_NAMES
 from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
 from sgim_nodes.core.scale import WorldScale, unit_box
 from sgim_ros.entry import AsyncNode, run_node  # noqa: F401 - the nodes' shared entry point
-from sgim_ros.params import Param, ParameterError, declare, one_of, positive
+from sgim_ros.params import Param, ParameterError, at_least, between, declare, one_of, positive
 from sim_bridge.scaling import OUTCOME_NOISE
 
 ACTION_SIZE = 24  # the fishing world's; a parameter of every node that checks sizes
@@ -39,6 +39,7 @@ class JobServer:
     def __init__(self, node: Node, action_type: type, name: str,
                  job: Callable[[Any], Awaitable[Any]]) -> None:
         self.job = job
+        self.node, self.name, self.action_type = node, name, action_type
         self.busy = False
         self._server = ActionServer(
             node, action_type, name, execute_callback=self._execute,
@@ -46,9 +47,15 @@ class JobServer:
             cancel_callback=lambda _: CancelResponse.ACCEPT)
 
     async def _execute(self, handle) -> Any:
+        from sgim_nodes.nodes.sim_client import SimulatorError
+
         self.busy = True
         try:
             result = await self.job(handle)
+        except SimulatorError as error:  # the simulator is gone: the job cannot go on
+            self.node.get_logger().error(f"{self.name} job aborted: {error}")
+            handle.abort()
+            return self.action_type.Result()
         finally:
             self.busy = False
         if handle.is_active:
@@ -75,30 +82,49 @@ def check_vector(values: Sequence[float], size: int, what: str, bound: float = 1
 
 
 COMMON_PARAMS = (
-    Param("learner", "sgim-d", "which learner the graph runs", one_of(*LEARNER_NAMES),
-          f"one of {', '.join(LEARNER_NAMES)}"),
+    Param("learner", "sgim-d", "which learner the graph runs", one_of(*LEARNER_NAMES)),
     Param("seed", 0, "seed of the run; each node derives its own random stream from it",
-          lambda v: v >= 0, ">= 0"),
+          at_least(0)),
     Param("action_size", ACTION_SIZE, "numbers per action (the world's action size)",
-          lambda v: v >= 1, ">= 1"),
+          at_least(1)),
     Param("outcome_size", OUTCOME_SIZE, "numbers per outcome (the world's outcome size)",
-          lambda v: v >= 1, ">= 1"),
+          at_least(1)),
     Param("outcome_noise", OUTCOME_NOISE, "the world's outcome noise (the paper's measure, in "
           "outcome units): every learner distance is a multiple of it (core/scale.py)",
-          positive, "> 0"),
+          positive),
     Param("resume_from", "", "run folder to resume: state is rebuilt from its recordings "
           "(see bag/resume.py); empty for a fresh run"),
-    Param("resume_segments", 0, "how many of its recordings to read (0: all)",
-          lambda v: v >= 0, ">= 0"),
+    Param("resume_segments", 0, "how many of its recordings to read (0: all)", at_least(0)),
 )
+
+# The range or choices of each LearnerConfig field, for the parameter descriptors;
+# LearnerConfig checks the same and the rules that tie fields together
+# (tests/graph/test_description.py compares them).
+LEARNER_BOUNDS = {
+    **dict.fromkeys(("max_goals_per_region", "zeta", "l_max", "k_max", "goal_budget",
+                     "attempt_patience", "memory_min_tail", "memory_max_tail",
+                     "local_neighbours", "min_goals_per_child"), at_least(1)),
+    **dict.fromkeys(("p_mode1", "p_mode2", "p_mode3", "explore_cap"), between(0.0, 1.0)),
+    **dict.fromkeys(("mode3_radius_noise", "reach_threshold_noise", "nm_initial_step",
+                     "local_radius_action", "local_step_fraction", "failure_cost_size",
+                     "imitation_epsilon", "memory_rebuild_fraction", "explore_distance_size",
+                     "trust_radius_action", "competence_radius_noise"), positive),
+    **dict.fromkeys(("alpha", "explore_gain", "min_region_width_size", "explore_action",
+                     "success_tolerance_noise", "interest_noise_correction",
+                     "imitation_count"), at_least(0)),
+    "inverse_model": one_of(*INVERSE_MODELS),
+    "optimiser": one_of(*OPTIMISERS),
+    "competence_reference": one_of("memory", "fixed"),
+}
 
 
 def learner_params() -> tuple[Param, ...]:
-    """One ROS parameter per LearnerConfig field, with the documented default;
-    LearnerConfig itself checks the values together."""
+    """One read-only ROS parameter per LearnerConfig field, with the documented default and
+    range; LearnerConfig itself checks the values together."""
     default = LearnerConfig()
     return tuple(
-        Param(f.name, getattr(default, f.name), f"see LearnerConfig.{f.name} in core/config.py")
+        Param(f.name, getattr(default, f.name), f"see LearnerConfig.{f.name} in core/config.py",
+              LEARNER_BOUNDS.get(f.name))
         for f in fields(LearnerConfig)
     )
 
@@ -108,10 +134,15 @@ def world_scale(values: dict[str, Any]) -> WorldScale:
     return unit_box(values["outcome_size"], values["outcome_noise"])
 
 
-def declare_learner(node: Node, extra: Sequence[Param] = ()) -> tuple[dict[str, Any],
-                                                                         LearnerConfig]:
-    """Declare the common, learner and node-specific parameters; return them and the config."""
-    values = declare(node, (*COMMON_PARAMS, *learner_params(), *extra))
+def learner_node_params(*extra: Param) -> tuple[Param, ...]:
+    """Every parameter of a learner node: the common ones, the learner's, then its own."""
+    return (*COMMON_PARAMS, *learner_params(), *extra)
+
+
+def declare_learner(node: Node, params: Sequence[Param]) -> tuple[dict[str, Any],
+                                                                   LearnerConfig]:
+    """Declare a learner node's parameters (learner_node_params); return them and the config."""
+    values = declare(node, params)
     names = {f.name for f in fields(LearnerConfig)}
     try:
         config = LearnerConfig(**{k: v for k, v in values.items() if k in names})

@@ -38,6 +38,7 @@ from __future__ import annotations
 import time
 from collections import deque
 
+from action_msgs.msg import GoalStatus
 from rclpy.action import ActionClient
 from rclpy.duration import Duration
 from rclpy.task import Future
@@ -56,16 +57,42 @@ from sgim_nodes.nodes.ros_glue import (
     AsyncNode,
     declare_learner,
     floats,
+    learner_node_params,
     run_node,
     vec,
     world_scale,
 )
-from sgim_nodes.nodes.sim_client import SERVICE_TIMEOUT, SimClient
+from sgim_nodes.nodes.sim_client import SIM_CLIENT_PARAMS, SimClient, SimulatorError
 from sgim_ros import qos
 from sgim_ros.entry import first_of
-from sgim_ros.params import Param, non_negative, one_of, positive
+from sgim_ros.params import Param, at_least, non_negative, one_of, positive
 
 SOCIAL = ("sgim-d", "demo-only")
+PARAMS = learner_node_params(
+    Param("movements", 5000, "the run's movement budget (the paper: 5000)", at_least(1)),
+    Param("teacher", "automatic", "who gives demonstrations: automatic (synchronous at its "
+          "period), human (any time), none", one_of("automatic", "human", "none")),
+    Param("demonstration_period", 150, "the automatic teacher's period P (paper: 150)",
+          at_least(1)),
+    Param("wait_for_teacher", 0.0, "human teacher: seconds the run waits for a demonstration "
+          f"every demonstration_period movements (0: never waits, {FOREVER:g}: until the "
+          "teacher acts)", lambda v: v >= 0 or v == FOREVER, f">= 0 or {FOREVER:g}"),
+    Param("wait_for_evaluation", True, "finish only after the final evaluation"),
+    Param("wait_for_recorder", True, "start only once a recorder listens"),
+    Param("startup_timeout", 60.0, "seconds to wait for the other nodes (their servers, "
+          "publishers and the recorder's readiness) before the start", positive),
+    Param("teacher_timeout", 60.0, "seconds to wait for the teacher at a boundary", positive,
+          read_only=False),
+    Param("call_timeout", 600.0, "seconds to wait for the answer of choose_goal or "
+          "register_demonstration, or for the result of a reach_goal or imitate job",
+          positive, read_only=False),
+    Param("evaluation_timeout", 600.0, "seconds to wait for the final evaluation", positive,
+          read_only=False),
+    *SIM_CLIENT_PARAMS,
+    Param("settle_time", 2.0, "seconds of discovery settling before the start", non_negative),
+    Param("teaching_set", "", "the teacher's teaching-set file (empty: the packaged one), to "
+          "validate demonstrations' teaching-set indices"),
+)
 
 
 class RunAborted(RuntimeError):
@@ -75,30 +102,7 @@ class RunAborted(RuntimeError):
 class SocialInteraction(AsyncNode):
     def __init__(self) -> None:
         super().__init__("social_interaction")
-        values, self.config = declare_learner(self, (
-            Param("movements", 5000, "the run's movement budget (the paper: 5000)",
-                  lambda v: v >= 1, ">= 1"),
-            Param("teacher", "automatic", "who gives demonstrations: automatic (synchronous "
-                  "at its period), human (any time), none", one_of("automatic", "human", "none"),
-                  "automatic, human or none"),
-            Param("demonstration_period", 150, "the automatic teacher's period P (paper: 150)",
-                  lambda v: v >= 1, ">= 1"),
-            Param("wait_for_teacher", 0.0, "human teacher: seconds the run waits for a "
-                  "demonstration every demonstration_period movements (0: never waits, "
-                  f"{FOREVER:g}: until the teacher acts)", lambda v: v >= 0 or v == FOREVER,
-                  f">= 0 or {FOREVER:g}"),
-            Param("wait_for_evaluation", True, "finish only after the final evaluation"),
-            Param("wait_for_recorder", True, "start only once a recorder listens"),
-            Param("startup_timeout", 60.0, "seconds to wait for the other nodes", positive,
-                  "> 0"),
-            Param("teacher_timeout", 60.0, "seconds to wait for the teacher at a boundary",
-                  positive, "> 0"),
-            SERVICE_TIMEOUT,
-            Param("settle_time", 2.0, "seconds of discovery settling before the start",
-                  non_negative, ">= 0"),
-            Param("teaching_set", "", "the teacher's teaching-set file (empty: the packaged "
-                  "one), to validate demonstrations' teaching-set indices"),
-        ))
+        values, self.config = declare_learner(self, PARAMS)
         self.p = values
         self.learner = values["learner"]
         self.total = values["movements"]
@@ -126,7 +130,7 @@ class SocialInteraction(AsyncNode):
         if social and values["teacher"] == "human":
             self.pace = PaceControl(self, self.total, values["demonstration_period"],
                                     values["wait_for_teacher"], self._preempt_goal)
-        self.sim = SimClient(self, values["service_timeout"])
+        self.sim = SimClient(self, values)
         self.goal_client = self.create_client(ChooseGoal, "choose_goal")
         self.register_client = self.create_client(RegisterDemonstration,
                                                   "register_demonstration")
@@ -218,15 +222,16 @@ class SocialInteraction(AsyncNode):
                              "waited for its turn")
             self._publish_status(RunStatus.STATE_RUNNING, "movement budget spent")
             if self.p["wait_for_evaluation"]:
-                await self._until(lambda: self.total in self.evaluated, 600.0,
-                                  f"the evaluation at movement {self.total}")
+                await self._until(lambda: self.total in self.evaluated,
+                                  self.p["evaluation_timeout"],
+                                  f"the evaluation at movement {self.total} (evaluator)")
             if self.refused:
                 self._publish_status(RunStatus.STATE_RUNNING, f"{self.refused} demonstrations "
                                      "refused in all (see the arbiter's log)")
             self._publish_status(RunStatus.STATE_FINISHED, "finished")
             self.get_logger().info(f"run finished: {self.count} movements in "
                                    f"{time.monotonic() - self._started:.1f} s")
-        except RunAborted as error:
+        except (RunAborted, SimulatorError) as error:
             self.get_logger().error(f"run aborted: {error}")
             self._publish_status(RunStatus.STATE_ABORTED, str(error))
             self.exit_code = 1
@@ -275,13 +280,31 @@ class SocialInteraction(AsyncNode):
             if ready.service_is_ready():
                 request = RecorderReady.Request(topics=list(RECORD_TOPICS))
                 request.publishers = [self.count_publishers(t) for t in RECORD_TOPICS]
-                reply = await ready.call_async(request)
-                if reply.ready:
+                # Each call is bounded: a request lost in discovery is asked again.
+                reply = await self._call(ready, request, "recorder_ready",
+                                         min(5.0, max(0.1, deadline - time.monotonic())),
+                                         fatal=False)
+                if reply is not None and reply.ready:
                     self.destroy_client(ready)
                     return
-                why = f"the recorder is not ready: {reply.message}"
+                why = ("the recorder did not answer recorder_ready" if reply is None
+                       else f"the recorder is not ready: {reply.message}")
             await first_of(self, Future(), 0.1)
-        raise RunAborted(f"after {timeout:g} s, {why}")
+        raise RunAborted(f"after {timeout:g} s waiting for recorder_ready, {why}")
+
+    async def _call(self, client, request, name: str, timeout: float | None = None,
+                    fatal: bool = True):
+        """A service call that gives up after `timeout` (call_timeout by default): None, or
+        RunAborted naming the service when `fatal`."""
+        timeout = self.p["call_timeout"] if timeout is None else timeout
+        call = client.call_async(request)
+        if await first_of(self, call, timeout):
+            return call.result()
+        client.remove_pending_request(call)
+        if fatal:
+            raise RunAborted(f"no answer from {name} after {timeout:g} s: is its node "
+                             "running?")
+        return None
 
     async def _run(self) -> None:
         while self.count < self.total:
@@ -334,8 +357,9 @@ class SocialInteraction(AsyncNode):
             self.latest_demo = demo
             self._publish_taken(demo)
             return
-        reply = await self.register_client.call_async(
-            RegisterDemonstration.Request(demonstration=demo))
+        reply = await self._call(self.register_client,
+                                 RegisterDemonstration.Request(demonstration=demo),
+                                 "register_demonstration")
         if not reply.accepted:
             self._refuse(demo, f"the explorer refused it: {reply.message}")
             return
@@ -360,8 +384,8 @@ class SocialInteraction(AsyncNode):
             self.goals_folded += 1
 
     async def _goal_attempt(self, cap: int) -> None:
-        reply = await self.goal_client.call_async(ChooseGoal.Request(
-            movement_index=self.count, min_goal_count=self.goals_folded))
+        reply = await self._call(self.goal_client, ChooseGoal.Request(
+            movement_index=self.count, min_goal_count=self.goals_folded), "choose_goal")
         if not reply.ok:
             raise RunAborted(f"goal generator: {reply.message}")
         result = await self._action(self.reach, ReachGoal.Goal(
@@ -376,7 +400,11 @@ class SocialInteraction(AsyncNode):
             movements_before=self.count), "imitate")
 
     async def _action(self, client: ActionClient, goal, name: str):
-        handle = await client.send_goal_async(goal)
+        timeout = self.p["call_timeout"]
+        sent = client.send_goal_async(goal)
+        if not await first_of(self, sent, timeout):
+            raise RunAborted(f"'{name}' did not answer a job request in {timeout:g} s")
+        handle = sent.result()
         if not handle.accepted:
             raise RunAborted(f"'{name}' refused a job: is another arbiter running?")
         self._job, self._job_name = handle, name
@@ -384,9 +412,16 @@ class SocialInteraction(AsyncNode):
             held = self.pending or (self.pace is not None and self.pace.paused)
             if held and name == "reach_goal":
                 handle.cancel_goal_async()  # a demonstration or a pause came while it was sent
-            response = await handle.get_result_async()
+            result_future = handle.get_result_async()
+            if not await first_of(self, result_future, timeout):
+                raise RunAborted(f"no result from the '{name}' job after {timeout:g} s "
+                                 f"(call_timeout)")
+            response = result_future.result()
         finally:
             self._job = None
+        if response.status == GoalStatus.STATUS_ABORTED:
+            raise RunAborted(f"the '{name}' job was aborted by its node at movement "
+                             f"{self.count}: its log says why")
         result = response.result
         self.count += result.movements_used
         return result

@@ -1,0 +1,152 @@
+"""A run folder: its lock, its metadata.yaml, and what its recording says about a resume.
+
+    runs/<name>/
+        .lock          held (flock) by the launcher and every node of the run while they live
+        metadata.yaml  learner, seed, budget, parameters, versions, timing, outcome
+        params.yaml    the ROS parameter file every node was started with
+        bag/, bag.resumeN/, logs/
+
+The lock stops two launchers, two resumes of one run for instance, from writing into the same
+folder; it is an flock, so the system frees it when its last holder dies, killed or not.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from sgim_nodes.core.learners import LEARNER_NAMES
+
+LOCK_NAME = ".lock"
+METADATA = "metadata.yaml"
+PARAMS = "params.yaml"
+RUNNING = "running"  # the outcome while a launcher works; left as is if the launcher is killed
+
+
+class RunFolderError(Exception):
+    """The run folder cannot be used as asked; the message says why and what to do."""
+
+
+@dataclass
+class RunLock:
+    """An exclusive lock on a run folder, held while this object (or a child process that
+    inherited `fd`) lives."""
+
+    path: Path
+    fd: int
+
+    @classmethod
+    def take(cls, run_dir: Path) -> RunLock:
+        path = run_dir / LOCK_NAME
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.read(fd, 64).decode(errors="replace").strip() or "unknown"
+            os.close(fd)
+            raise RunFolderError(
+                f"{run_dir} is in use by another launcher (pid {holder}) or by nodes it "
+                "started: wait until it ends, or stop it") from None
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+        return cls(path, fd)
+
+    def release(self) -> None:
+        with contextlib.suppress(OSError):
+            os.close(self.fd)
+
+
+def write_metadata(run_dir: Path, meta: dict[str, Any]) -> None:
+    """Atomically: a reader never sees half a file, a crash leaves the old one."""
+    tmp = run_dir / f".{METADATA}.tmp"
+    tmp.write_text(yaml.safe_dump(meta, sort_keys=False))
+    os.replace(tmp, run_dir / METADATA)
+
+
+def read_metadata(run_dir: Path) -> dict[str, Any]:
+    """The metadata of a run to resume, checked: RunFolderError names what is missing."""
+    path = run_dir / METADATA
+    if not run_dir.is_dir():
+        raise RunFolderError(f"{run_dir} is not a folder")
+    try:
+        meta = yaml.safe_load(path.read_text())
+    except OSError as error:
+        raise RunFolderError(f"{run_dir} is not a run folder: cannot read {METADATA} "
+                             f"({error.strerror})") from None
+    except yaml.YAMLError as error:
+        raise RunFolderError(f"{path} is not valid YAML: {str(error).splitlines()[0]}") from None
+    if not isinstance(meta, dict):
+        raise RunFolderError(f"{path} must be a mapping (learner: ..., seed: ..., "
+                             f"movements: ...), it holds a {type(meta).__name__}")
+    problems = []
+    hint = _params_hint(run_dir)
+    for key, valid, what in (
+            ("learner", lambda v: v in LEARNER_NAMES, f"one of {', '.join(LEARNER_NAMES)}"),
+            ("seed", lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= 0,
+             "an integer >= 0"),
+            ("movements", lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= 1,
+             "an integer >= 1")):
+        if key not in meta:
+            problems.append(f"has no '{key}' ({what})"
+                            + (f"; {PARAMS} says {key}: {hint[key]}" if key in hint else ""))
+        elif not valid(meta[key]):
+            problems.append(f"'{key}' must be {what}, got {meta[key]!r}")
+    if problems:
+        raise RunFolderError(f"cannot resume {run_dir}: {path.name} " + "; ".join(problems)
+                             + f". Fix {path} and resume again.")
+    return meta
+
+
+def _params_hint(run_dir: Path) -> dict[str, Any]:
+    try:
+        data = yaml.safe_load((run_dir / PARAMS).read_text())
+        return dict(data["/**"]["ros__parameters"])
+    except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError):
+        return {}
+
+
+def recorded_count(run_dir: Path) -> int:
+    """The last movement index the run's recordings hold (0 when none)."""
+    from sgim_nodes.bag.resume import load_run_folder, segments
+
+    if not segments(run_dir):
+        return 0  # the launcher stopped before the recorder made its bag
+    try:
+        records = load_run_folder(run_dir)
+    except Exception as error:  # a reader's refusal: say it in one line
+        raise RunFolderError(f"cannot read the recordings of {run_dir}: {error}") from None
+    return max((m.index for m in records.movements), default=0)
+
+
+@dataclass
+class ResumeCheck:
+    """What the recordings say before a resume: whether there is anything to do, and what
+    was lost (movements the run made but its bag does not hold)."""
+
+    recorded: int
+    claimed: int
+    budget: int
+
+    @property
+    def lost(self) -> tuple[int, int] | None:
+        return (self.recorded + 1, self.claimed) if self.claimed > self.recorded else None
+
+    @property
+    def complete(self) -> bool:
+        return self.recorded >= self.budget
+
+
+def check_resume(run_dir: Path, meta: dict[str, Any]) -> ResumeCheck:
+    """Compare the recordings with what metadata.yaml says the run did."""
+    claimed = meta.get("movements_done", 0)
+    if not isinstance(claimed, int) or isinstance(claimed, bool):
+        claimed = 0
+    if meta.get("outcome") == "finished":
+        claimed = max(claimed, meta["movements"])
+    return ResumeCheck(recorded_count(run_dir), claimed, meta["movements"])

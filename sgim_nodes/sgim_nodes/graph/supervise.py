@@ -1,0 +1,339 @@
+"""Watch a running graph until it ends, and say truly how it ended.
+
+A run is finished only when the arbiter says so (exit code 0 after its FINISHED status) and
+the recorder has written everything (exit code 0; the recorder exits 3 on a write error such
+as a full disk). Any other node that stops before the end fails the run, the simulator
+excepted (it holds no state and is restarted, at most MAX_RESPAWNS times). Every wait here is
+bounded: the run's --timeout, the arbiter's exit after its last status, the recorder's end.
+
+The launcher's own output goes to the terminal and to logs/launcher.log; a terminal pipe that
+breaks (`run_experiment.sh ... | tee log`, then Ctrl-C, which also ends tee) is noticed once
+and then ignored, so stopping the nodes never fails half-way.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TextIO
+
+from sgim_nodes.graph.description import ARBITER, MAX_RESPAWNS, RECORDER, NodeSpec
+
+ARBITER_EXIT_WAIT = 60.0  # seconds for the arbiter to exit after its final status
+# The recorder ends by itself once the movements up to the final count are in and the graph
+# has been quiet (at most 30 s after the final status, nodes/recorder.py FINISH_LIMIT).
+RECORDER_EXIT_WAIT = 45.0
+RECORDER_WRITE_ERROR = 3  # the recorder's exit code when it cannot write the bag
+ROS_LOG_PREFIX = re.compile(r"^\[[A-Z]+\] \[[\d.]+\] \[[\w/.]+\]: ")
+
+
+class RunFailed(RuntimeError):
+    """The run cannot be reported finished; the message says why."""
+
+
+class Interrupted(BaseException):
+    """A signal asked the launcher to stop (SIGINT, SIGTERM, SIGHUP)."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+class SafeStream:
+    """A text stream for the launcher's messages: a write to a closed pipe is dropped (once
+    noticed, the descriptor is pointed at /dev/null, so that nothing later fails either),
+    and every line also goes to the run's launcher.log when one is open."""
+
+    def __init__(self, stream: TextIO | None = None) -> None:
+        self._stream = stream  # None: whatever sys.stderr is when writing
+        self.broken = False
+        self.log: TextIO | None = None
+
+    @property
+    def stream(self) -> TextIO:
+        return sys.stderr if self._stream is None else self._stream
+
+    def write(self, text: str) -> int:
+        if self.log is not None:
+            with contextlib.suppress(OSError, ValueError):
+                self.log.write(text.replace("\r", "\n"))
+                self.log.flush()
+        if not self.broken:
+            try:
+                self.stream.write(text)
+                self.stream.flush()
+            except (BrokenPipeError, OSError, ValueError):
+                self._break()
+        return len(text)
+
+    def flush(self) -> None:
+        if not self.broken:
+            try:
+                self.stream.flush()
+            except (BrokenPipeError, OSError, ValueError):
+                self._break()
+
+    def _break(self) -> None:
+        self.broken = True
+        with contextlib.suppress(OSError, ValueError, AttributeError):
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, self.stream.fileno())
+            os.close(devnull)
+
+    def isatty(self) -> bool:
+        return not self.broken and self.stream.isatty()
+
+    def fileno(self) -> int:
+        return self.stream.fileno()
+
+
+OUT = SafeStream()
+
+
+def say(message: str) -> None:
+    OUT.write(f"run_experiment: {message}\n")
+
+
+@contextlib.contextmanager
+def stop_signals():
+    """SIGINT, SIGTERM and SIGHUP (a closed terminal) raise Interrupted; inside `shielded()`
+    they are only noted, so that stopping the nodes is never cut short."""
+    state = {"shielded": False, "pending": None}
+
+    def handler(signum, _frame):
+        if state["shielded"]:
+            state["pending"] = signum
+            say(f"{signal.Signals(signum).name} received: already stopping, please wait")
+            return
+        raise Interrupted(signum)
+
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM,
+                                                        signal.SIGHUP)}
+
+    @contextlib.contextmanager
+    def shielded():
+        state["shielded"] = True
+        try:
+            yield
+        finally:
+            state["shielded"] = False
+
+    try:
+        yield shielded
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+
+
+def watch_owner(fd_variable: str = "SGIM_LAUNCHER_FD") -> None:
+    """If a program that watches over this launcher (run_study, a test) gave it a lifeline,
+    stop the run as on SIGTERM when that program dies, however it dies."""
+    try:
+        fd = int(os.environ.get(fd_variable, ""))
+        os.fstat(fd)
+    except (ValueError, OSError):
+        return
+    os.environ.pop(fd_variable, None)
+
+    def watch() -> None:
+        while True:
+            try:
+                if not os.read(fd, 64):
+                    break
+            except InterruptedError:
+                continue
+            except OSError:
+                break
+        os.kill(os.getpid(), signal.SIGTERM)
+
+    threading.Thread(target=watch, name="owner-watchdog", daemon=True).start()
+
+
+class Progress:
+    """Follows run_status and the movements with a small rclpy node of the launcher's own:
+    the arbiter's state and message, and the highest movement index seen, a witness of what
+    the run did that is independent of the recorder."""
+
+    def __init__(self, total: int, done: int, quiet: bool) -> None:
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.node import Node
+        from tqdm import tqdm
+
+        from sgim_msgs.msg import Movement, RunStatus
+        from sgim_ros import qos
+
+        self.rclpy = rclpy
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, signal_handler_options=_no_rclpy_signal_handlers())
+        self.node = Node("experiment_launcher", context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.state: int | None = None
+        self.message = ""
+        self.status_count = done
+        self.seen = done
+        self.bar = tqdm(total=total, initial=done, disable=quiet, unit="mv", file=OUT,
+                        dynamic_ncols=True)
+        self.node.create_subscription(RunStatus, "run_status", self._on_status, qos.RECORDS)
+        self.node.create_subscription(Movement, "movements", self._on_movement, qos.RECORDS)
+        self.finished_state = (RunStatus.STATE_FINISHED, RunStatus.STATE_ABORTED)
+
+    def _on_status(self, msg) -> None:
+        self.status_count = max(self.status_count, msg.movement_index)
+        self.state, self.message = msg.state, msg.message
+        self._show()
+
+    def _on_movement(self, msg) -> None:
+        if msg.process != msg.PROCESS_EVALUATION:
+            self.seen = max(self.seen, int(msg.index))
+            self._show()
+
+    def _show(self) -> None:
+        self.bar.update(max(0, max(self.seen, self.status_count) - self.bar.n))
+
+    @property
+    def count(self) -> int:
+        return max(self.seen, self.status_count)
+
+    def say(self, text: str) -> None:
+        """A line of the launcher's, above the progress bar."""
+        self.bar.write(f"run_experiment: {text}", file=OUT)
+
+    def spin(self, seconds: float) -> None:
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.05)
+
+    @property
+    def over(self) -> bool:
+        return self.state in self.finished_state
+
+    def close(self) -> None:
+        with contextlib.suppress(Exception):
+            self.bar.close()
+        self.executor.shutdown()
+        self.node.destroy_node()
+        self.rclpy.try_shutdown(context=self.context)
+
+
+def _no_rclpy_signal_handlers():
+    """The launcher handles its signals itself (stop_signals)."""
+    from rclpy.signals import SignalHandlerOptions
+
+    return SignalHandlerOptions.NO
+
+
+def log_reason(log: Path, limit: int = 300) -> str:
+    """Why a node ended, from its log, to quote in the run's outcome: its first logged error
+    (the cause; later ones tend to follow from it), else the last line that looks like one
+    (a traceback's exception). DDS transport chatter is not a reason."""
+    try:
+        lines = [line.strip() for line in log.read_text(errors="replace").splitlines()
+                 if "RTPS_" not in line]
+    except OSError:
+        return ""
+    logged = [line for line in lines if line.startswith("[ERROR]")]
+    if logged:
+        return ROS_LOG_PREFIX.sub("", logged[0])[:limit]
+    for line in reversed(lines):
+        if any(word in line for word in ("Error", "error", "refused", "cannot")):
+            return line[:limit]
+    return ""
+
+
+@dataclass
+class Supervisor:
+    """Starts the graph's nodes through `launch` and watches them until the run ends."""
+
+    nodes: list[NodeSpec]
+    launch: Callable[[NodeSpec, str], object]  # (spec, log name) -> Popen
+    log_dir: Path
+    timeout: float
+    progress: Progress
+    address_file: Path | None = None  # the web teacher's page address, said once it serves
+    respawns: dict[str, int] = field(default_factory=dict)
+    procs: dict[str, object] = field(default_factory=dict)
+
+    def start(self) -> None:
+        for spec in self.nodes:
+            self.procs[spec.name] = self.launch(spec, spec.name)
+
+    def log_of(self, name: str) -> Path:
+        restarts = self.respawns.get(name, 0)
+        return self.log_dir / (f"{name}.restart{restarts}.log" if restarts else f"{name}.log")
+
+    def failure(self, name: str, code: int) -> str:
+        if name == RECORDER and code == RECORDER_WRITE_ERROR:
+            what = "the recorder could not write the bag"
+        else:
+            what = f"the {name} node stopped" if name == RECORDER else f"node {name} stopped"
+        reason = log_reason(self.log_of(name))
+        return (f"{what} (exit {code}) at movement {self.progress.count}"
+                + (f": {reason}" if reason else "") + f"; see {self.log_of(name)}")
+
+    def watch(self) -> int:
+        """Until the arbiter ends: the arbiter's exit code. RunFailed if any other node stops
+        (the simulator is restarted) or the run outlives its timeout."""
+        specs = {spec.name: spec for spec in self.nodes}
+        began = time.monotonic()
+        arbiter = self.procs[ARBITER]
+        while True:
+            self.progress.spin(0.2)
+            if self.address_file is not None and self.address_file.exists():
+                self.progress.say(f"teach at {self.address_file.read_text().strip()}")
+                self.address_file = None
+            if arbiter.poll() is not None or self.progress.over:
+                break
+            for name, child in list(self.procs.items()):
+                code = child.poll()
+                if code is None or name == ARBITER:
+                    continue
+                spec = specs[name]
+                if spec.interactive:  # the human teacher left the prompt: the run goes on
+                    say(f"{name} ended (exit {code}); the run goes on without it")
+                    del self.procs[name]
+                    continue
+                if not spec.respawn or self.respawns.get(name, 0) >= MAX_RESPAWNS:
+                    raise RunFailed(self.failure(name, code))
+                self.respawns[name] = self.respawns.get(name, 0) + 1
+                say(f"{name} stopped (exit {code}); restarting it "
+                    f"({self.respawns[name]}/{MAX_RESPAWNS})")
+                self.procs[name] = self.launch(spec, f"{name}.restart{self.respawns[name]}")
+            if time.monotonic() - began > self.timeout:
+                raise RunFailed(f"timed out after {self.timeout:g} s (--timeout) at movement "
+                                f"{self.progress.count}")
+        try:
+            arbiter.wait(timeout=ARBITER_EXIT_WAIT)
+        except Exception:  # subprocess.TimeoutExpired
+            raise RunFailed(f"the arbiter did not exit {ARBITER_EXIT_WAIT:g} s after its "
+                            f"final status; see {self.log_of(ARBITER)}") from None
+        self.progress.spin(0.5)  # the last status may still be on its way
+        return arbiter.returncode
+
+    def let_interactive_end(self, seconds: float) -> None:
+        """Give a terminal prompt (human_input) time to leave by itself once the run is over."""
+        specs = {spec.name: spec for spec in self.nodes}
+        deadline = time.monotonic() + seconds
+        for name, child in self.procs.items():
+            if specs[name].interactive:
+                while child.poll() is None and time.monotonic() < deadline:
+                    time.sleep(0.1)
+
+    def wait_for_recorder(self) -> None:
+        """The recorder ends by itself once it has written the end of the run; RunFailed if it
+        ends with an error."""
+        recorder = self.procs[RECORDER]
+        deadline = time.monotonic() + RECORDER_EXIT_WAIT
+        while recorder.poll() is None and time.monotonic() < deadline:
+            self.progress.spin(0.2)
+        if recorder.poll() is not None and recorder.returncode != 0:
+            raise RunFailed(self.failure(RECORDER, recorder.returncode))
