@@ -105,7 +105,10 @@ def test_bad_input_from_the_page_is_refused_with_a_message(web_run):
         const r = await fetch('/api/command', {method: 'POST', body: '{"command": "teach", '
             + '"index": 999}', headers: {'X-Teacher': '1'}});
         return await r.json(); }""")
-    assert reply == {"ok": False, "message": "no teaching-set entry 999: entries are 0 to 25"}
+    from sim_bridge.data_files import load_teaching_set
+
+    last = len(load_teaching_set()) - 1
+    assert reply == {"ok": False, "message": f"no teaching-set entry 999: entries are 0 to {last}"}
     forged = page.evaluate("""async () => (await fetch('/api/command', {method: 'POST',
         body: '{"command": "pace", "what": "pause"}'})).status""")
     assert forged == 403  # no X-Teacher header: what a cross-site form would send
