@@ -107,7 +107,7 @@ def test_bad_input_from_the_page_is_refused_with_a_message(web_run):
         return await r.json(); }""")
     from sim_bridge.data_files import load_teaching_set
 
-    last = len(load_teaching_set()) - 1
+    last = len(load_teaching_set().outcomes) - 1
     assert reply == {"ok": False, "message": f"no teaching-set entry 999: entries are 0 to {last}"}
     forged = page.evaluate("""async () => (await fetch('/api/command', {method: 'POST',
         body: '{"command": "pace", "what": "pause"}'})).status""")

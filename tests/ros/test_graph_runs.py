@@ -39,7 +39,7 @@ def finish(child, tmp_path, learner, timeout=330):
 
 # sgim-d runs with a lenient teacher, which runs out of demonstrations mid-run: its turns
 # without a demonstration must still match the runner.
-TOLERANCE = {"sgim-d": 5.0, "demo-only": 0.7}  # in units of the outcome noise (0.07)
+TOLERANCE = {"sgim-d": 8.0, "demo-only": 0.7}  # in units of the outcome noise (0.07)
 
 
 def run_single_process(learner):
