@@ -205,6 +205,40 @@ def test_the_launcher_refuses_bad_parameters_before_making_the_run_folder(tmp_pa
     assert "Traceback" not in err and not list(tmp_path.iterdir())
 
 
+def test_the_launcher_refuses_a_misspelt_name_in_a_parameter_file(tmp_path, capsys):
+    """A wildcard section is given to every node: a name no node declares would be ignored."""
+    from sgim_nodes.graph.experiment import run
+
+    params_file = tmp_path / "mine.yaml"
+    params_file.write_text("/**:\n  ros__parameters:\n    goal_budgte: 1\n")
+    runs = tmp_path / "runs"
+    code = run(_args("sgim-d", "--runs-dir", str(runs), "--params-file", str(params_file)))
+    err = capsys.readouterr().err
+    assert code == 2 and "unknown parameter 'goal_budgte'" in err and "goal_budget" in err
+    assert "Traceback" not in err and not runs.exists()
+
+
+def test_metadata_holds_every_parameter_of_every_node_with_the_value_it_runs_with(tmp_path):
+    """What an audit of a run needs: the teacher's tolerance, the simulator's noise, the
+    recorder's settings, ... whether given or left at their defaults."""
+    from sgim_nodes.graph.experiment import plan_new
+
+    params_file = tmp_path / "extra.yaml"
+    params_file.write_text("sim_bridge:\n  ros__parameters:\n    noise: 0.01\n")
+    plan = plan_new(_args("sgim-d", "--runs-dir", str(tmp_path), "--name", "run",
+                          "--params-file", str(params_file), "--param", "tolerance_noise=2.0"))
+    plan.lock.release()
+    recorded = yaml.safe_load(yaml.safe_dump(plan.meta))["node_parameters"]
+    assert set(recorded) == {spec.name for spec in plan.nodes}
+    for spec in plan.nodes:
+        assert set(recorded[spec.name]) == {p.name for p in spec.params}, spec.name
+    assert recorded["sim_bridge"]["noise"] == 0.01  # its own section
+    assert recorded["evaluator"]["noise"] != 0.01  # the section is the simulator's
+    assert recorded["teacher"]["tolerance_noise"] == 2.0
+    assert recorded["recorder"]["chunk_seconds"] > 0 and recorded["recorder"]["chunk_messages"]
+    assert recorded["recorder"]["output"] == str(tmp_path / "run" / "bag")
+
+
 @pytest.mark.parametrize("argv", [["--timeout", "-1"], ["--timeout", "0"],
                                   ["--timeout", "nan"], ["--timeout", "inf"]])
 def test_a_timeout_must_be_a_positive_number_of_seconds(argv, capsys):
