@@ -50,6 +50,16 @@ def test_runs_of_a_learner_with_different_teachers_or_budgets_are_not_pooled(
     assert results["final_errors"]["sgim-d [teacher=human]"]["n"] == 1
 
 
+def test_runs_of_a_learner_with_different_budgets_are_not_pooled(make_study) -> None:
+    study = make_study(seeds=3, learners=("random",))
+    _set_metadata(study / "random-seed2", movements=40)  # same recordings, another budget
+    with pytest.warns(AnalysisWarning, match="random: runs differ in movements"):
+        loaded = load_study(study)
+    assert loaded.learners == ["random [movements=20]", "random [movements=40]"]
+    assert [r.seed for r in loaded.runs_of("random [movements=20]")] == [0, 1]
+    assert [r.seed for r in loaded.runs_of("random [movements=40]")] == [2]
+
+
 def test_runs_differing_in_a_parameter_are_labelled_by_it(make_study) -> None:
     study = make_study(seeds=2, learners=("random",))
     for seed, period in ((0, 150), (1, 50)):
