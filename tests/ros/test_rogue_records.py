@@ -159,6 +159,9 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
     assert q["demonstrations"]["out-of-bounds"] == 1
     assert q["demonstrations"]["unknown-teaching-index"] == 2
     assert q["competences"] == {"non-finite": 1, "out-of-bounds": 1, "size": 1}
+    meta = yaml.safe_load((run_dir / "metadata.yaml").read_text())  # counted there too
+    assert meta["outcome"] == "finished" and meta["quarantine"] == {
+        "total": report["total_quarantined"], "by_topic": q, "write_errors": {}}
     # The evaluator's memory was the learner's: each evaluation is recomputed exactly from
     # the bag's movements and taken demonstrations, on the evaluator's own world.
     from sgim_nodes.bag.rebuild import rebuild_from_records
