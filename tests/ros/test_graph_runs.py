@@ -3,6 +3,7 @@ single-process runner."""
 
 from __future__ import annotations
 
+import itertools
 import subprocess
 import sys
 
@@ -72,6 +73,16 @@ def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner)
     assert all(len(e.distances) == len(run.evaluations[0].distances) > 50
                for e in run.evaluations)
     assert run.run_status[-1].state == RunStatus.STATE_FINISHED
+    # RunStatus as its message file says: "started", then at the first job boundary after
+    # every further 5 % of the budget, "movement budget spent" and "finished".
+    statuses = run.run_status
+    assert (statuses[0].message, statuses[0].movement_index) == ("started", 0)
+    assert [s.message for s in statuses[-2:]] == ["movement budget spent", "finished"]
+    progress = [s.movement_index for s in statuses
+                if s.state == RunStatus.STATE_RUNNING and not s.message]
+    assert progress[-1] == MOVEMENTS and len(progress) <= 21, progress  # the last: spent
+    assert all(b - a >= MOVEMENTS // 20 for a, b in itertools.pairwise(progress[:-1])), \
+        progress
 
     if learner in ("sgim-d", "saggriac", "random-goals"):
         maps = run.region_map
