@@ -68,6 +68,8 @@ def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner)
     # Every movement recorded once, in order.
     assert [m.index for m in run.movements] == list(range(1, MOVEMENTS + 1))
     processes = [m.process for m in run.movements]
+    # Movement.msg: evaluation casts and a teacher's measuring casts are never published.
+    assert not {Movement.PROCESS_EVALUATION, Movement.PROCESS_DEMONSTRATION} & set(processes)
     # Evaluations at the right counts, and the run's end recorded.
     assert [e.movement_index for e in run.evaluations] == [0, 100, 200, 300]
     assert all(len(e.distances) == len(run.evaluations[0].distances) > 50
