@@ -104,7 +104,9 @@ class EvaluationRecord:
     movement_index: int
     mean_distance: float
     goals: np.ndarray  # (n, outcome_size)
-    reached: np.ndarray  # (n, outcome_size), NaN rows for failed casts
+    # (n, outcome_size): the water, or a touch-down on land (it may lie outside [-1, 1]^2);
+    # NaN rows only for casts that never came down (Evaluation.msg)
+    reached: np.ndarray
     distances: np.ndarray  # (n,)
 
 
