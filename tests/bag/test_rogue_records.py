@@ -164,6 +164,25 @@ def test_only_the_demonstrations_the_learner_took_enter_memory(tmp_path, clean):
     assert _same_memory(state, reference) and state.n_demonstrations == 1
 
 
+def test_a_late_demonstration_leaves_a_resumed_run_at_its_budget(tmp_path, clean):
+    """`--teacher external`, a demonstration once the budget is spent: it is recorded, never
+    taken, and the movements an imitation of it would make are beyond the budget. A resume
+    starts at the budget exactly (it used to count past it and wait for an evaluation that
+    never comes)."""
+    rng = np.random.default_rng(8)
+    late = [("demonstrations", samples.demonstration(2, N, rng)),
+            *[("movements", samples.movement(k, rng, process=2)) for k in (N + 1, N + 2)]]
+    run = _run_folder(tmp_path, [*clean[:-1], *late, clean[-1]])
+    with warnings.catch_warnings(record=True):
+        warnings.simplefilter("always")
+        point = resume_point(run, CONFIG)
+        reference = resume_point(_run_folder(tmp_path / "ref", clean), CONFIG)
+    assert point.count == N and _same_memory(point.state, reference.state)
+    assert point.state.n_demonstrations == reference.state.n_demonstrations == 1
+    assert [(q.index, q.problem.kind) for q in point.state.quarantined] == [
+        (N + 1, "beyond-budget"), (N + 2, "beyond-budget")]
+
+
 def test_rebuild_reads_a_run_folder_with_its_resumed_segments(tmp_path, clean, capsys):
     cut = next(i for i, (t, m) in enumerate(clean) if t == "movements" and m.index == 70)
     run = _run_folder(tmp_path, clean[: cut + 1])
