@@ -88,6 +88,21 @@ def test_two_runs_with_the_same_seed_are_refused_unless_allowed(
     assert main([str(study), "--out", str(tmp_path / "out"), "--allow-repeated-seeds"]) == 0
 
 
+@pytest.mark.parametrize("outcome", ["failed: the recorder could not write the bag (exit 3)",
+                                     "finished"])
+def test_a_run_whose_recordings_end_early_is_not_finished(tmp_path: Path, outcome) -> None:
+    """A full disk: the bag ends at movement 14 with its last evaluation at 10. Its final
+    error is not the run's, even if an older launcher wrote `finished`."""
+    study = tmp_path / "study"
+    messages = run_messages("random", 0, {0: 0.9, 10: 0.5, 20: 0.3})
+    cut = next(i for i, (t, m) in enumerate(messages) if t == "movements" and m.index == 14)
+    run_dir = write_run(study, "random", 0, messages[:cut + 1])
+    _set_metadata(run_dir, outcome=outcome)
+    with pytest.warns(AnalysisWarning, match=r"run not finished .*14/20 movements"):
+        run = load_study(study).runs[0]
+    assert not run.finished and run.movements_done == 14 and run.eval_index.tolist() == [0, 10]
+
+
 def test_quarantined_records_are_reported_and_left_out(tmp_path: Path) -> None:
     study = tmp_path / "study"
     messages = run_messages("random", 0, {0: 0.9, 20: 0.3})

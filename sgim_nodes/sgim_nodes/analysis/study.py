@@ -122,7 +122,10 @@ class RunData:
 
     @property
     def finished(self) -> bool:
-        return self.metadata.get("outcome") == "finished" or self.final_state == 1
+        """Said finished (by its metadata or its last status) and recorded to its budget: a
+        bag that ends early is not a finished run, whatever its metadata claims."""
+        said = self.metadata.get("outcome") == "finished" or self.final_state == 1
+        return said and self.movements_done >= self.total_movements
 
     def region_map_at(self, movement: int) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
         """(map movement count, lower, upper, interest) of the leaves of the map closest to
@@ -296,7 +299,8 @@ def load_run_data(run_dir: Path, use_cache: bool = True, warn: Warn = _default_w
         warn(f"{bag}: no movement and no evaluation could be read: run skipped")
         return None
     if metadata and not run.finished:
-        warn(f"{name}: run not finished (outcome {metadata.get('outcome', 'unknown')!r}, "
+        short = " but its recordings end early" if metadata.get("outcome") == "finished" else ""
+        warn(f"{name}: run not finished (outcome {metadata.get('outcome', 'unknown')!r}{short}, "
              f"{run.movements_done}/{run.total_movements} movements): using what it recorded")
     return run
 
