@@ -123,3 +123,50 @@ def test_a_node_ends_when_its_launcher_is_killed(tmp_path, ignores_sigint):
     finally:
         with contextlib.suppress(ProcessLookupError):
             os.killpg(owner.pid, signal.SIGKILL)
+
+
+WATCHED_LAUNCHER = """
+import signal, sys, time
+from sgim_nodes.graph.supervise import watch_owner
+def stop(signum, frame):
+    print("stopping the run as on SIGTERM", flush=True)
+    sys.exit(143)
+signal.signal(signal.SIGTERM, stop)
+watch_owner()
+print("watching", flush=True)
+time.sleep(600)
+"""
+
+
+@pytest.mark.ros
+def test_a_launcher_stops_its_run_when_the_study_that_started_it_is_killed(tmp_path):
+    """run_study.sh's launchers hold the read end of its lifeline: SIGKILL of the study
+    closes it, and each launcher stops its run as on SIGTERM (and records it so)."""
+    import subprocess
+
+    log = tmp_path / "launcher.log"
+    owner = subprocess.Popen([sys.executable, "-c", OWNER.replace(
+        'child = group.start("node", [sys.executable, "-c", sys.argv[1]])',
+        f'child = group.start("node", [sys.executable, "-c", sys.argv[1]], '
+        f'stdout=open({str(log)!r}, "w"))'), WATCHED_LAUNCHER],
+        stdout=subprocess.PIPE, text=True, start_new_session=True)
+    pid = None
+    try:
+        pid = int(owner.stdout.readline())
+        deadline = time.monotonic() + 30
+        while "watching" not in log.read_text() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert _alive(pid) and "watching" in log.read_text()
+        os.kill(owner.pid, signal.SIGKILL)
+        owner.wait(timeout=10)
+        deadline = time.monotonic() + 30
+        while _alive(pid) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not _alive(pid), "the launcher outlived its study"
+        assert "stopping the run as on SIGTERM" in log.read_text()
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(owner.pid, signal.SIGKILL)
+        if pid is not None:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(pid, signal.SIGKILL)
