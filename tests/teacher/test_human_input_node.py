@@ -1,13 +1,15 @@
 """The human_input node driven through its prompt, over ROS, as a person would at a terminal.
 
-The node reads a pipe here: the test types lines, reads what it prints and checks the
-demonstrations it publishes. Until the lead adds the console script it is started with
-`python -m teacher.human_input_node`.
+The node reads a pipe here (a pseudo-terminal in the last test): the test types lines, reads
+what it prints and checks the demonstrations it publishes. Until the lead adds the console
+script it is started with `python -m teacher.human_input_node`.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import pty
 import signal
 import subprocess
 import threading
@@ -30,18 +32,21 @@ PROMPT = "human> "
 class Terminal:
     """The node's stdin and stdout: type lines, wait for what it prints."""
 
-    def __init__(self, child: subprocess.Popen, client: GraphClient) -> None:
-        self.child, self.client = child, client
+    def __init__(self, child: subprocess.Popen, client: GraphClient,
+                 tty: int | None = None) -> None:
+        """``tty``: the master side of the pseudo-terminal the node reads and writes, if any."""
+        self.child, self.client, self.tty = child, client, tty
         self.text = ""
         self._lock = threading.Lock()
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
 
     def _read(self) -> None:
-        fd = self.child.stdout.fileno()
-        while chunk := os.read(fd, 4096):
-            with self._lock:
-                self.text += chunk.decode(errors="replace")
+        fd = self.child.stdout.fileno() if self.tty is None else self.tty
+        with contextlib.suppress(OSError):  # a pseudo-terminal whose node ended: EIO
+            while chunk := os.read(fd, 4096):
+                with self._lock:
+                    self.text += chunk.decode(errors="replace")
 
     def output(self, start: int = 0) -> str:
         with self._lock:
@@ -54,11 +59,14 @@ class Terminal:
         out = self.output(start)
         return out[: out.index(text)]
 
-    def type(self, line: str) -> int:
-        """Type a line; returns where the reply starts in the output."""
+    def type(self, line: str, end: str = "\n") -> int:
+        """Type a line (or keys, with end=""); returns where the reply starts in the output."""
         start = len(self.output())
-        self.child.stdin.write(f"{line}\n".encode())
-        self.child.stdin.flush()
+        if self.tty is not None:
+            os.write(self.tty, f"{line}{end}".encode())
+        else:
+            self.child.stdin.write(f"{line}{end}".encode())
+            self.child.stdin.flush()
         return start
 
     def command(self, line: str) -> str:
@@ -253,3 +261,57 @@ def test_bad_parameters_and_ctrl_c(ros_processes, client, tmp_path, teaching_fil
     os.killpg(child.pid, signal.SIGINT)
     assert term.exit_code() == 0
     assert "bye" in term.output() and "Traceback" not in term.output()
+
+
+UP, LEFT, ENTER = "\x1b[A", "\x1b[D", "\r"
+
+
+def test_a_terminal_gets_line_editing_history_and_news_above_the_prompt(
+        ros_processes, client, tmp_path, teaching_file):
+    """On a (pseudo-)terminal: readline's arrows and a history kept across sessions, and a
+    line from the graph printed above the prompt without losing what is being typed."""
+    from sgim_msgs.msg import RunStatus
+    from sgim_ros import qos
+
+    history = tmp_path / "history"
+    history.write_text("list\n")  # what a previous session typed
+    ros_processes.env = {**ros_processes.env, "SGIM_TEACHER_HISTORY": str(history),
+                         "TERM": "xterm"}
+    status = client.node.create_publisher(RunStatus, "/run_status", qos.RECORDS)
+    master, slave = pty.openpty()
+    try:
+        child = ros_processes.start(
+            "human_input_tty", [PYTHON, "-m", "teacher.human_input_node", "--ros-args", "-p",
+                                f"teaching_set:={teaching_file}"],
+            stdin=slave, stdout=slave, stderr=slave, cwd=tmp_path)
+    finally:
+        os.close(slave)
+    try:
+        term = Terminal(child, client, tty=master)
+        term.wait_for(PROMPT)
+        # Up recalls the previous session's line; Enter runs it.
+        reply = term.wait_for(PROMPT, term.type(UP, end=ENTER))
+        assert "4 of 4 teaching goals not reached" in reply
+        # Left arrows move in the line: "sttus" corrected to "status".
+        reply = term.wait_for(PROMPT, term.type("sttus" + 3 * LEFT + "a", end=ENTER))
+        assert "movements: 0" in reply
+        assert "^[[" not in term.output()  # no arrow key printed as garbage
+        # News from the run while "li" is half typed: above the prompt, which is redrawn with
+        # the typed text, so finishing the line still runs "list".
+        assert client.spin_until(lambda: status.get_subscription_count() > 0)
+        start = term.type("li", end="")
+        term.wait_for("li", start)
+        status.publish(RunStatus(state=RunStatus.STATE_RUNNING, movement_index=5,
+                                 total_movements=10, message="running"))
+        before = term.wait_for("progress: movement 5/10 (50 %)", start)
+        term.wait_for(f"[movements 5/10 | error - | demos 0] {PROMPT}li", start + len(before))
+        assert before.endswith("\r\x1b[K")  # the line being typed was cleared first
+        reply = term.wait_for(PROMPT, term.type("st", end=ENTER))
+        assert "4 of 4 teaching goals not reached" in reply
+        start = term.type("quit", end=ENTER)
+        assert term.exit_code() == 0, term.output()
+        assert "bye" in term.output(start) and "Traceback" not in term.output()
+    finally:
+        os.close(master)
+    lines = history.read_text().splitlines()  # kept for the next session
+    assert lines[0] == "list" and lines[-3:] == ["status", "list", "quit"]
