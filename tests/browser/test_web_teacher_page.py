@@ -198,7 +198,8 @@ def test_teach_a_run_from_the_page(web_run):
 
     # Last turn: paste 24 numbers; their outcome is measured (a cast not recorded) first.
     wait_for_turn(page, 3 * PERIOD)
-    pasted = [round(float(v), 6) for v in teaching.actions[(goal + 1) % len(teaching.actions)]]
+    entry = (goal + 1) % len(teaching.actions)
+    pasted = [round(float(v), 6) for v in teaching.actions[entry]]
     page.fill("#action-text", ", ".join(repr(v) for v in pasted))
     page.click("#send-action")
     sent = wait_for_message(page, "sent demonstration 3", timeout=120)
@@ -235,7 +236,8 @@ def test_teach_a_run_from_the_page(web_run):
     if offer["teaching_set_index"] >= 0:
         assert np.array_equal(offered.action, teaching.actions[offer["teaching_set_index"]])
     assert measured.teaching_set_index == -1 and np.allclose(measured.action, pasted)
-    assert np.all(np.abs(measured.outcome) <= 1.0)  # what the simulator measured
+    # What the simulator measured: near the entry's own outcome (motor noise aside).
+    assert np.linalg.norm(measured.outcome - teaching.outcomes[entry]) < 0.15
     for demo in run.demonstrations:
         at = demo.movement_index
         follow = run.movements[at: at + IMITATIONS]
