@@ -114,7 +114,7 @@ def _movement(index: int, action, outcome):
 
 def test_list_teach_goal_and_bad_input_through_the_prompt(ros_processes, client, tmp_path,
                                                           teaching_file):
-    from sgim_msgs.msg import Demonstration, Evaluation, Movement
+    from sgim_msgs.msg import Demonstration, Evaluation, Movement, RunStatus
     from sgim_ros import qos
     from teacher.human_commands import GoalPoint, LearnerState, TeachingLibrary
 
@@ -188,6 +188,17 @@ def test_list_teach_goal_and_bad_input_through_the_prompt(ros_processes, client,
     assert "the action of learner movement 3, outcome (-0.200, -0.200)" in reply
     assert client.spin_until(lambda: len(demos) == 3)
     assert demos[2].teaching_set_index == -1 and np.array_equal(demos[2].action, learner)
+
+    # The budget is spent: the arbiter's refusal of a late demonstration is a warning, and
+    # the prompt refuses to send another one, saying why.
+    status = client.node.create_publisher(RunStatus, "/run_status", qos.RECORDS)
+    assert client.spin_until(lambda: status.get_subscription_count() > 0)
+    status.publish(RunStatus(state=RunStatus.STATE_RUNNING, movement_index=3,
+                             total_movements=3, message="demonstration 4 (human) refused: "
+                             "the movement budget is spent"))
+    term.wait_for("warning: demonstration 4 (human) refused: the movement budget is spent")
+    assert ("error: the movement budget is spent (3/3): the learner takes no more "
+            "demonstrations") in term.command("teach 2")
 
     start = term.type("quit")
     assert term.exit_code() == 0
