@@ -87,6 +87,10 @@ def test_turns_step_pause_and_the_end_of_the_run_at_the_prompt(ros_processes, ro
     term.wait_for("the run is over (finished) at movement 200", timeout=200)
     assert child.wait(timeout=120) == 0, term.text()[-3000:]
     assert "Traceback" not in term.text()
+    # The prompt has the terminal to itself: no progress bar (run without --quiet), progress
+    # is a line above the prompt instead.
+    assert "mv/s" not in term.text()
+    assert re.search(r"\nprogress: movement 1\d\d/200 \(50 %\)\n", term.text())
 
     run = load_run(tmp_path / "run" / "bag")
     assert [m.index for m in run.movements] == list(range(1, MOVEMENTS + 1))
