@@ -170,8 +170,14 @@ def test_list_teach_goal_and_bad_input_through_the_prompt(ros_processes, client,
     # No execute_action server in this test and no outcome in the file: refused, clearly.
     assert "start sim_bridge, or add 'outcome: [x, y]'" in term.command("yaml no_outcome.yaml")
 
+    # 'goal' only offers the library's pair, saying how far it lands; 'send' demonstrates it.
+    assert "error: no offer to send: 'goal X Y' makes one" in term.command("send")
     reply = term.command("goal 0.1 0.2")
-    assert "sent demonstration 2 at movement 3" in reply
+    assert "\noffer: for goal (+0.100, +0.200): " in reply
+    assert "from the goal" in reply and "type 'send' to demonstrate it" in reply
+    client.spin_for(0.3)
+    assert len(demos) == 1  # nothing sent yet
+    assert "sent demonstration 2 at movement 3" in term.command("send")
     assert client.spin_until(lambda: len(demos) == 2)
     state = LearnerState(A)
     for m in sent:
@@ -186,7 +192,9 @@ def test_list_teach_goal_and_bad_input_through_the_prompt(ros_processes, client,
     # Among a lone learner movement and the teaching set, the exact pair wins and is named.
     reply = term.command("goal -0.2 -0.2")
     assert "the action of learner movement 3, outcome (-0.200, -0.200)" in reply
+    assert "sent demonstration 3 at movement 3" in term.command("send")
     assert client.spin_until(lambda: len(demos) == 3)
+    assert "error: no offer to send" in term.command("send")  # an offer is sent once
     assert demos[2].teaching_set_index == -1 and np.array_equal(demos[2].action, learner)
 
     # The budget is spent: the arbiter's refusal of a late demonstration is a warning, and
