@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 import re
 
+import pytest
+
 from sgim_nodes.bag.types import RECORDED_TOPICS, SOURCE_MSG_DIR, TOPICS, VIEW_TOPICS
 from tests.conftest import REPO
 
@@ -52,6 +54,7 @@ def test_the_foxglove_layout_shows_the_runs_own_topics():
     assert raw and set(raw) <= set(RECORDED_TOPICS)
 
 
+@pytest.mark.ros  # view/markers.py builds visualization_msgs
 def test_the_markers_doc_lists_every_marker_topic_and_the_frame():
     from sgim_nodes.view.markers import FRAME
 
