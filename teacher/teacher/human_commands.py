@@ -9,7 +9,8 @@ Commands (``help`` prints this list):
   list          teaching-set goals the learner has not reached within the tolerance, numbered
   status        latest evaluation error, movement count, demonstrations given
   teach N       send teaching-set entry N as a demonstration
-  goal X Y      send the library's most reliable (action, outcome) pair for the goal (X, Y)
+  goal X Y      offer the library's most reliable (action, outcome) pair for the goal (X, Y),
+                saying how far its outcome is from the goal; ``send`` demonstrates it
   yaml FILE     send the 24 action parameters of FILE; the outcome comes from executing them
                 once through the simulator's execute_action service with record=false (not a
                 learner movement), so a person never has to guess it; an ``outcome: [x, y]``
@@ -21,10 +22,11 @@ Commands (``help`` prints this list):
 A demonstration the learner cannot take any more (its movement budget is spent, the run is
 over) is refused here with the reason, never sent to be silently dropped.
 
-Why ``goal`` sends a stored pair and not the inverse model's interpolated action: a
+Why ``goal`` offers a stored pair and not the inverse model's interpolated action: a
 demonstration must carry the outcome its action produces, and only stored pairs have a known
 one. The library is the teaching set plus the learner's landed movements, so the reply states
-which of the two the pair came from.
+which of the two the pair came from, and how far its outcome is from the goal: the person
+decides whether to ``send`` it (the web page's offer and confirm, at the prompt).
 """
 
 from __future__ import annotations
@@ -53,7 +55,9 @@ HELP = """commands:
   list          teaching-set goals not reached yet (within the tolerance), with their outcome
   status        latest evaluation error, movement count, demonstrations given
   teach N       send teaching-set entry N (see list) as a demonstration
-  goal X Y      send the library's most reliable action for the goal point (X, Y) in [-1, 1]^2
+  goal X Y      offer the library's most reliable action for the goal point (X, Y) in
+                [-1, 1]^2, with the outcome it gives and how far that is from the goal
+  send          demonstrate the last offer (goal X Y)
   yaml FILE     send the action in FILE (a list of 24 numbers in [-1, 1], or `action: [...]`);
                 its outcome is measured by executing it once through execute_action (not
                 recorded); a file's `outcome: [x, y]` is used only if that service is absent
@@ -102,6 +106,11 @@ class GoalPoint:
 
 
 @dataclass(frozen=True)
+class Send:
+    """Demonstrate the last offer made for a goal point (the person confirms it)."""
+
+
+@dataclass(frozen=True)
 class YamlFile:
     path: str
 
@@ -114,10 +123,10 @@ class PaceRequest:
     steps: int = 0
 
 
-Command = Help | Quit | ListGoals | Status | Teach | GoalPoint | YamlFile | PaceRequest
+Command = Help | Quit | ListGoals | Status | Teach | GoalPoint | Send | YamlFile | PaceRequest
 
 _NO_ARGUMENT = {"help": Help, "?": Help, "quit": Quit, "exit": Quit, "list": ListGoals,
-                "status": Status}
+                "status": Status, "send": Send}
 PACE_WORDS = ("pause", "resume", "step")
 
 
@@ -317,7 +326,7 @@ class TeachingLibrary:
                 return Reply(self.list_text(state))
             case Status():
                 return Reply(status_text(state))
-            case PaceRequest():
+            case PaceRequest() | Send():
                 return command
             case Teach(index):
                 refuse_if_over(state)

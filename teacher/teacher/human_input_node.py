@@ -57,10 +57,12 @@ from teacher.human_commands import (
     OUTCOME_SIZE,
     CommandError,
     ExecuteFirst,
+    GoalPoint,
     LearnerState,
     PaceRequest,
     Quit,
     Reply,
+    Send,
     SendDemonstration,
     TeachingLibrary,
     executed_demonstration,
@@ -106,6 +108,7 @@ class HumanInputNode(Node):
         self._decile = 0  # progress printed every 10 % of the budget
         self._waiting_turn = False
         self._held = False
+        self.offer: SendDemonstration | None = None  # made by 'goal X Y', sent by 'send'
         # A rogue movement must not move the count the teacher's demonstrations carry; the
         # first valid movement sets it (a resumed run does not start at 1).
         self.gate = LiveGate(self.get_logger().warning,
@@ -179,7 +182,7 @@ class HumanInputNode(Node):
             limit = ("no time limit" if msg.wait_seconds < 0
                      else f"{msg.wait_seconds_left:.0f} s")
             self.notify(f"your turn at movement {msg.movement_index} ({limit}): teach N, "
-                        "goal X Y or yaml FILE to demonstrate, resume to go on")
+                        "goal X Y then send, or yaml FILE to demonstrate, resume to go on")
         self._waiting_turn = msg.waiting_for_teacher
         held = msg.paused and msg.held
         if held and not self._held:  # the pause took effect (a state, not every message)
@@ -235,8 +238,16 @@ class HumanInputNode(Node):
             self.finished = True
         elif isinstance(decision, Reply):
             self.say(decision.text)
+        elif isinstance(decision, SendDemonstration) and isinstance(command, GoalPoint):
+            self.offer = decision  # an action chosen for the person: they confirm it
+            self.say(f"offer: {decision.text}\ntype 'send' to demonstrate it")
         elif isinstance(decision, SendDemonstration):
             self._send(decision)
+        elif isinstance(decision, Send):
+            if self.offer is None:
+                raise CommandError("no offer to send: 'goal X Y' makes one")
+            offer, self.offer = self.offer, None
+            self._send(offer)
         elif isinstance(decision, ExecuteFirst):
             self._start_execution(decision)
         elif isinstance(decision, PaceRequest):

@@ -2,7 +2,10 @@
 
 One short SGIM-D run with `--teacher web --wait-for-teacher forever` serves both tests: it
 waits for the teacher before its first movement and every PERIOD movements, so the tests act
-when they choose, on a machine however loaded. The run is checked from its bag.
+when they choose, on a machine however loaded. At its turns the page steps the run, then
+demonstrates in each of its three ways: a click on an unreached teaching goal, a click on
+another point and the confirmation of the action offered for it, 24 pasted numbers. The run
+is checked from its bag.
 
 SGIM_SCREENSHOT=path: also save the page's screenshot there (the README's figure is made so:
 SGIM_SCREENSHOT=docs/figures/web_teacher.png ./test.sh tests/browser).
@@ -24,7 +27,7 @@ from tests.conftest import REPO
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
 RUN = str(REPO / "ros_ws" / "run_experiment.sh")
-MOVEMENTS, PERIOD, SEED = 300, 150, 4
+MOVEMENTS, PERIOD, SEED = 600, 150, 4  # teacher turns at 0, 150, 300 and 450
 IMITATIONS = LearnerConfig().imitation_count
 
 
@@ -40,7 +43,7 @@ def web_run(tmp_path_factory, ros_domain):
         RUN, "sgim-d", "--seed", str(SEED), "--movements", str(MOVEMENTS), "--eval-every",
         "100", "--period", str(PERIOD), "--teacher", "web", "--wait-for-teacher", "forever",
         "--web-port", "0", "--runs-dir", str(runs), "--name", "web", "--domain",
-        str(ros_domain), "--quiet", "--timeout", "400"],
+        str(ros_domain), "--quiet", "--timeout", "900"],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     address = runs / "web" / "web_teacher.url"
     try:
@@ -114,14 +117,39 @@ def test_bad_input_from_the_page_is_refused_with_a_message(web_run):
     assert forged == 403  # no X-Teacher header: what a cross-site form would send
 
 
+def far_point(page) -> tuple[tuple[float, float], dict[str, float]]:
+    """A point of the outcome space far from every teaching goal, and where it is drawn."""
+    width = page.evaluate("document.querySelector('#overlay').width")
+    outcomes = np.array(page.evaluate("window.teacherPage.view.teaching.outcomes"))
+    grid = np.linspace(-0.8, 0.8, 17)
+    points = np.array([(x, y) for x in grid for y in grid])
+    far = np.linalg.norm(points[:, None, :] - outcomes[None], axis=2).min(axis=1)
+    x, y = points[int(np.argmax(far))]
+    assert far.max() * width / 2 > 20  # pixels: not a click on a teaching goal
+    return (float(x), float(y)), {"x": (x + 1) / 2 * width, "y": (1 - y) / 2 * width}
+
+
 def test_teach_a_run_from_the_page(web_run):
     from sgim_msgs.msg import Movement
     from sgim_nodes.bag.reader import load_run
+    from sim_bridge.data_files import load_teaching_set
+
+    teaching = load_teaching_set()
 
     child, page, run_dir = web_run
     wait_for_turn(page, 0)
-    page.click("#resume")  # go on without a demonstration
-    wait_for_message(page, "going on without a demonstration")
+    assert page.locator("#total").inner_text() == str(MOVEMENTS)  # the budget
+    # Step 3 movements (this ends the turn without a demonstration), then go on.
+    page.fill("#step-count", "3")
+    page.click("#step")
+    wait_for_message(page, "stepping 3 movements")
+    page.wait_for_function("document.querySelector('#pace-state').textContent === 'paused' "
+                           "&& document.querySelector('#count').textContent === '3'",
+                           timeout=60_000)
+    time.sleep(1.0)
+    assert page.locator("#count").inner_text() == "3"  # a step pauses again
+    page.click("#resume")
+    wait_for_message(page, "^resumed")
     # Landings appear as the run goes, coloured by process, until the next turn.
     page.wait_for_function("window.teacherStats.landings > 20", timeout=120_000)
     wait_for_turn(page, PERIOD)
@@ -151,6 +179,31 @@ def test_teach_a_run_from_the_page(web_run):
     time.sleep(1.0)
     assert int(page.locator("#count").inner_text()) == paused_at  # paused means paused
     page.click("#resume")
+
+    # Next turn: click a point far from every teaching goal, be offered the library's most
+    # reliable action for it with the outcome it gives, and confirm it.
+    wait_for_turn(page, 2 * PERIOD)
+    point, pixel = far_point(page)
+    page.locator("#overlay").click(position=pixel)
+    assert re.search(r"^offer \d+: for goal ", wait_for_message(page, "^offer "))
+    offer = page.evaluate("window.teacherPage.view.offer")
+    assert np.allclose(offer["goal"], point, atol=0.01)
+    assert page.locator("#offer").is_visible()
+    shown = page.locator("#offer-text").inner_text()
+    expected = "outcome ({:+.3f}, {:+.3f})".format(*offer["outcome"])
+    assert shown == offer["text"] and expected in shown
+    page.click("#confirm")
+    assert "sent demonstration 2 at movement 300" in wait_for_message(page, "sent demonstration 2")
+    assert not page.locator("#offer").is_visible()
+
+    # Last turn: paste 24 numbers; their outcome is measured (a cast not recorded) first.
+    wait_for_turn(page, 3 * PERIOD)
+    entry = (goal + 1) % len(teaching.actions)
+    pasted = [round(float(v), 6) for v in teaching.actions[entry]]
+    page.fill("#action-text", ", ".join(repr(v) for v in pasted))
+    page.click("#send-action")
+    sent = wait_for_message(page, "sent demonstration 3", timeout=120)
+    assert "sent demonstration 3 at movement 450: the action of the pasted action, executed" in sent
     output, _ = child.communicate(timeout=300)
     assert child.returncode == 0, output[-3000:]
     assert "teach at http://127.0.0.1:" in output
@@ -161,28 +214,48 @@ def test_teach_a_run_from_the_page(web_run):
     assert "the run is over (finished)" in wait_for_message(page, "the run is over")
     stats = page.evaluate("window.teacherStats")
     assert stats["updates"] > 20 and stats["landings"] > landed
+    view = page.evaluate("window.teacherPage.view")
+    legend = page.locator("#legend").inner_text()
+    assert all(name in legend for name in ("own goal", "exploration", "imitation",
+                                           "demonstration", "interest: low", "unreached"))
     if os.environ.get("SGIM_SCREENSHOT"):
         page.evaluate("window.scrollTo(0, 0)")
         page.screenshot(path=os.environ["SGIM_SCREENSHOT"], full_page=True)
 
-    # The bag: the learner received exactly that demonstration and imitated it at once.
-    from sim_bridge.data_files import load_teaching_set
-
-    teaching = load_teaching_set()
+    # The bag: the learner received exactly these demonstrations and imitated each at once.
     run = load_run(run_dir / "bag")
     assert [m.index for m in run.movements] == list(range(1, MOVEMENTS + 1))
-    (demo,) = run.demonstrations
-    assert demo.source == "web" and demo.teaching_set_index == goal
-    assert demo.movement_index == PERIOD
-    assert np.array_equal(demo.action, teaching.actions[goal])
-    assert np.array_equal(demo.outcome, teaching.outcomes[goal])
-    follow = run.movements[PERIOD: PERIOD + IMITATIONS]
-    assert all(m.process == Movement.PROCESS_IMITATION for m in follow)
-    assert all(np.allclose(m.goal, demo.outcome) for m in follow)
-    assert all(np.linalg.norm(m.action - demo.action) < LearnerConfig().imitation_epsilon
-               for m in follow)
+    clicked, offered, measured = run.demonstrations
+    assert [d.source for d in run.demonstrations] == ["web"] * 3
+    assert [d.movement_index for d in run.demonstrations] == [PERIOD, 2 * PERIOD, 3 * PERIOD]
+    assert clicked.teaching_set_index == goal
+    assert np.array_equal(clicked.action, teaching.actions[goal])
+    assert np.array_equal(clicked.outcome, teaching.outcomes[goal])
+    assert offered.teaching_set_index == offer["teaching_set_index"]
+    assert np.allclose(offered.outcome, offer["outcome"], rtol=0, atol=1e-9)
+    if offer["teaching_set_index"] >= 0:
+        assert np.array_equal(offered.action, teaching.actions[offer["teaching_set_index"]])
+    assert measured.teaching_set_index == -1 and np.allclose(measured.action, pasted)
+    # What the simulator measured: near the entry's own outcome (motor noise aside).
+    assert np.linalg.norm(measured.outcome - teaching.outcomes[entry]) < 0.15
+    for demo in run.demonstrations:
+        at = demo.movement_index
+        follow = run.movements[at: at + IMITATIONS]
+        assert all(m.process == Movement.PROCESS_IMITATION for m in follow)
+        assert all(np.allclose(m.goal, demo.outcome) for m in follow)
+        assert all(np.linalg.norm(m.action - demo.action) < LearnerConfig().imitation_epsilon
+                   for m in follow)
     imitations = [m for m in run.movements if m.process == Movement.PROCESS_IMITATION]
-    assert len(imitations) == IMITATIONS
+    assert len(imitations) == 3 * IMITATIONS
+    # The page drew the run's own error curve, region tree and goals.
+    page_errors = {int(m): d for m, d in view["evaluations"]}
+    bag_errors = {e.movement_index: e.mean_distance for e in run.evaluations}
+    assert len(page_errors) >= len(bag_errors) - 1 >= 5
+    assert all(bag_errors.get(m) == d for m, d in page_errors.items())
+    drawn = sorted(tuple(round(v, 9) for v in rect[:4]) for rect in view["regions"]["rects"])
+    assert any(drawn == sorted(tuple(round(float(v), 9) for v in (*r.lower, *r.upper))
+                               for r in snapshot.leaves) for snapshot in run.region_map)
+    assert view["goal"] is not None and all(-1 <= v <= 1 for v in view["goal"])
     # The page's picture was the run's: every landing of the bag was drawn.
     landed_in_bag = sum(m.status == Movement.STATUS_OK for m in run.movements)
     assert stats["landings"] == landed_in_bag

@@ -22,7 +22,7 @@ def test_marker_topics_show_the_run_live_and_in_the_bag(ros_processes, ros_domai
     from sgim_msgs.msg import Movement
     from sgim_nodes.bag.reader import load_run, read_messages
     from sgim_nodes.core.teaching import DEFAULT_TOLERANCE_NOISE, Teacher
-    from sgim_nodes.view.picture import PROCESS_COLOURS
+    from sgim_nodes.view.picture import PROCESS_COLOURS, interest_colour
     from sgim_ros import qos
     from sim_bridge.data_files import load_teaching_set
     from sim_bridge.scaling import OUTCOME_NOISE
@@ -75,6 +75,17 @@ def test_marker_topics_show_the_run_live_and_in_the_bag(ros_processes, ros_domai
     leaves = run.region_map[-1].leaves
     fills = [m for m in seen["regions"][-1].markers if m.type == Marker.TRIANGLE_LIST]
     assert len(fills[0].points) == 6 * len(leaves) >= 6
+    # ... each coloured by its interest over the highest leaf interest (the page's palette).
+    top = max(r.interest for r in leaves)
+    interests = {tuple(np.round([*r.lower, *r.upper], 9)): r.interest for r in leaves}
+    fill = fills[0]
+    for k in range(0, len(fill.points), 6):
+        low, high = fill.points[k], fill.points[k + 2]
+        interest = interests[tuple(np.round([low.x, low.y, high.x, high.y], 9))]
+        expected = np.array(interest_colour(interest / top if top > 0 else 0.0)) / 255.0
+        c = fill.colors[k]
+        assert np.allclose([c.r, c.g, c.b], expected)
+    assert len({(c.r, c.g, c.b) for c in fill.colors}) > 1  # interest differs between leaves
     goal = seen["current_goal"][-1].markers[-1]
     assert goal.type == Marker.SPHERE and -1 <= goal.pose.position.x <= 1
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import subprocess
 import threading
 import time
@@ -86,6 +87,10 @@ def test_turns_step_pause_and_the_end_of_the_run_at_the_prompt(ros_processes, ro
     term.wait_for("the run is over (finished) at movement 200", timeout=200)
     assert child.wait(timeout=120) == 0, term.text()[-3000:]
     assert "Traceback" not in term.text()
+    # The prompt has the terminal to itself: no progress bar (run without --quiet), progress
+    # is a line above the prompt instead.
+    assert "mv/s" not in term.text()
+    assert re.search(r"\nprogress: movement 1\d\d/200 \(50 %\)\n", term.text())
 
     run = load_run(tmp_path / "run" / "bag")
     assert [m.index for m in run.movements] == list(range(1, MOVEMENTS + 1))
@@ -93,3 +98,37 @@ def test_turns_step_pause_and_the_end_of_the_run_at_the_prompt(ros_processes, ro
     assert demo.source == "human" and demo.movement_index == PERIOD
     follow = run.movements[PERIOD: PERIOD + IMITATIONS]
     assert all(m.process == Movement.PROCESS_IMITATION for m in follow)
+
+
+@pytest.mark.parametrize(("teacher", "wait"), [("web", "1.5"), ("human", "0")])
+def test_wait_for_teacher_seconds_ends_each_turn_and_zero_never_waits(
+        ros_processes, ros_domain, tmp_path, teacher, wait):
+    """Nobody teaches: with SECONDS the run waits that long at each turn, then goes on by
+    itself; with 0 it never waits (the web page is left unopened, the prompt's input is empty)."""
+    from sgim_nodes.bag.reader import load_run, read_messages
+
+    movements, period = 100, 50
+    child = ros_processes.start(f"wait-{teacher}", [
+        RUN, "sgim-d", "--seed", "6", "--movements", str(movements), "--eval-every", "0",
+        "--period", str(period), "--teacher", teacher, "--wait-for-teacher", wait,
+        *(["--web-port", "0"] if teacher == "web" else []), "--runs-dir", str(tmp_path),
+        "--name", "run", "--domain", str(ros_domain), "--quiet", "--timeout", "300"],
+        stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    output, _ = child.communicate(timeout=330)
+    assert child.returncode == 0, output[-3000:]
+
+    arbiter_log = (tmp_path / "run" / "logs" / "social_interaction.log").read_text()
+    turns = re.findall(r"teacher's turn at movement (\d+): (.+)", arbiter_log)
+    states = [msg for topic, _, msg in read_messages(tmp_path / "run" / "bag")
+              if topic == "/pace_state"]
+    waited = sorted({s.movement_index for s in states if s.waiting_for_teacher})
+    if wait == "0":
+        assert turns == [] and waited == []
+        assert all(s.teacher_period == 0 and not s.paused for s in states)
+    else:
+        assert turns == [(str(i), f"no demonstration within {wait} s") for i in (0, period)]
+        assert waited == [0, period]
+        assert {s.wait_seconds for s in states} == {float(wait)}
+    run = load_run(tmp_path / "run" / "bag")
+    assert [m.index for m in run.movements] == list(range(1, movements + 1))
+    assert not run.demonstrations

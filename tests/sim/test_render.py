@@ -39,13 +39,15 @@ def test_frames_and_the_tool(tmp_path):
         assert gif.n_frames > 5 and gif.size == (192, 72)
 
 
-@pytest.mark.parametrize(("args", "words"), [
-    (["--teaching-index", "999"], "no teaching-set entry 999"),
-    (["--action", "missing.yaml"], "cannot read missing.yaml"),
+@pytest.mark.parametrize(("args", "out", "words"), [
+    (["--teaching-index", "999"], "x.gif", "no teaching-set entry 999"),
+    (["--action", "missing.yaml"], "x.gif", "cannot read missing.yaml"),
+    (["--teaching-index", "3"], "cast.mp4", "writes animated GIFs only"),
 ])
-def test_the_tool_refuses_bad_input(tmp_path, capsys, args, words):
-    assert tool.main([*args, "--out", str(tmp_path / "x.gif")]) == 2
+def test_the_tool_refuses_bad_input(tmp_path, capsys, args, out, words):
+    assert tool.main([*args, "--out", str(tmp_path / out)]) == 2
     assert words in capsys.readouterr().err
+    assert not (tmp_path / out).exists()
 
 
 def test_the_tool_checks_the_action_file(tmp_path, capsys):

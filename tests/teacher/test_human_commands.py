@@ -18,6 +18,7 @@ from teacher.human_commands import (
     ListGoals,
     Quit,
     Reply,
+    Send,
     SendDemonstration,
     Status,
     Teach,
@@ -63,6 +64,7 @@ def state() -> LearnerState:
         ("goal 0.1 -0.2", GoalPoint((0.1, -0.2))),
         ("goal 1 -1", GoalPoint((1.0, -1.0))),
         ("goal 1e-1 .5", GoalPoint((0.1, 0.5))),
+        ("send", Send()),
         ("yaml demo.yaml", YamlFile("demo.yaml")),
         ("yaml 'my demo.yaml'", YamlFile("my demo.yaml")),
     ],
@@ -137,7 +139,7 @@ def test_status_and_prompt(library, state):
 
 def test_help_and_quit(library, state):
     assert library.decide(Help(), state) == Reply(HELP)
-    for name in ("list", "status", "teach", "goal", "yaml", "quit"):
+    for name in ("list", "status", "teach", "goal", "send", "yaml", "quit"):
         assert name in HELP
     assert library.decide(Quit(), state) == Quit()
 

@@ -1,13 +1,15 @@
 """The human_input node driven through its prompt, over ROS, as a person would at a terminal.
 
-The node reads a pipe here: the test types lines, reads what it prints and checks the
-demonstrations it publishes. Until the lead adds the console script it is started with
-`python -m teacher.human_input_node`.
+The node reads a pipe here (a pseudo-terminal in the last test): the test types lines, reads
+what it prints and checks the demonstrations it publishes. Until the lead adds the console
+script it is started with `python -m teacher.human_input_node`.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import pty
 import signal
 import subprocess
 import threading
@@ -30,18 +32,21 @@ PROMPT = "human> "
 class Terminal:
     """The node's stdin and stdout: type lines, wait for what it prints."""
 
-    def __init__(self, child: subprocess.Popen, client: GraphClient) -> None:
-        self.child, self.client = child, client
+    def __init__(self, child: subprocess.Popen, client: GraphClient,
+                 tty: int | None = None) -> None:
+        """``tty``: the master side of the pseudo-terminal the node reads and writes, if any."""
+        self.child, self.client, self.tty = child, client, tty
         self.text = ""
         self._lock = threading.Lock()
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
 
     def _read(self) -> None:
-        fd = self.child.stdout.fileno()
-        while chunk := os.read(fd, 4096):
-            with self._lock:
-                self.text += chunk.decode(errors="replace")
+        fd = self.child.stdout.fileno() if self.tty is None else self.tty
+        with contextlib.suppress(OSError):  # a pseudo-terminal whose node ended: EIO
+            while chunk := os.read(fd, 4096):
+                with self._lock:
+                    self.text += chunk.decode(errors="replace")
 
     def output(self, start: int = 0) -> str:
         with self._lock:
@@ -54,11 +59,14 @@ class Terminal:
         out = self.output(start)
         return out[: out.index(text)]
 
-    def type(self, line: str) -> int:
-        """Type a line; returns where the reply starts in the output."""
+    def type(self, line: str, end: str = "\n") -> int:
+        """Type a line (or keys, with end=""); returns where the reply starts in the output."""
         start = len(self.output())
-        self.child.stdin.write(f"{line}\n".encode())
-        self.child.stdin.flush()
+        if self.tty is not None:
+            os.write(self.tty, f"{line}{end}".encode())
+        else:
+            self.child.stdin.write(f"{line}{end}".encode())
+            self.child.stdin.flush()
         return start
 
     def command(self, line: str) -> str:
@@ -106,7 +114,7 @@ def _movement(index: int, action, outcome):
 
 def test_list_teach_goal_and_bad_input_through_the_prompt(ros_processes, client, tmp_path,
                                                           teaching_file):
-    from sgim_msgs.msg import Demonstration, Evaluation, Movement
+    from sgim_msgs.msg import Demonstration, Evaluation, Movement, RunStatus
     from sgim_ros import qos
     from teacher.human_commands import GoalPoint, LearnerState, TeachingLibrary
 
@@ -162,8 +170,14 @@ def test_list_teach_goal_and_bad_input_through_the_prompt(ros_processes, client,
     # No execute_action server in this test and no outcome in the file: refused, clearly.
     assert "start sim_bridge, or add 'outcome: [x, y]'" in term.command("yaml no_outcome.yaml")
 
+    # 'goal' only offers the library's pair, saying how far it lands; 'send' demonstrates it.
+    assert "error: no offer to send: 'goal X Y' makes one" in term.command("send")
     reply = term.command("goal 0.1 0.2")
-    assert "sent demonstration 2 at movement 3" in reply
+    assert "\noffer: for goal (+0.100, +0.200): " in reply
+    assert "from the goal" in reply and "type 'send' to demonstrate it" in reply
+    client.spin_for(0.3)
+    assert len(demos) == 1  # nothing sent yet
+    assert "sent demonstration 2 at movement 3" in term.command("send")
     assert client.spin_until(lambda: len(demos) == 2)
     state = LearnerState(A)
     for m in sent:
@@ -178,8 +192,21 @@ def test_list_teach_goal_and_bad_input_through_the_prompt(ros_processes, client,
     # Among a lone learner movement and the teaching set, the exact pair wins and is named.
     reply = term.command("goal -0.2 -0.2")
     assert "the action of learner movement 3, outcome (-0.200, -0.200)" in reply
+    assert "sent demonstration 3 at movement 3" in term.command("send")
     assert client.spin_until(lambda: len(demos) == 3)
+    assert "error: no offer to send" in term.command("send")  # an offer is sent once
     assert demos[2].teaching_set_index == -1 and np.array_equal(demos[2].action, learner)
+
+    # The budget is spent: the arbiter's refusal of a late demonstration is a warning, and
+    # the prompt refuses to send another one, saying why.
+    status = client.node.create_publisher(RunStatus, "/run_status", qos.RECORDS)
+    assert client.spin_until(lambda: status.get_subscription_count() > 0)
+    status.publish(RunStatus(state=RunStatus.STATE_RUNNING, movement_index=3,
+                             total_movements=3, message="demonstration 4 (human) refused: "
+                             "the movement budget is spent"))
+    term.wait_for("warning: demonstration 4 (human) refused: the movement budget is spent")
+    assert ("error: the movement budget is spent (3/3): the learner takes no more "
+            "demonstrations") in term.command("teach 2")
 
     start = term.type("quit")
     assert term.exit_code() == 0
@@ -253,3 +280,57 @@ def test_bad_parameters_and_ctrl_c(ros_processes, client, tmp_path, teaching_fil
     os.killpg(child.pid, signal.SIGINT)
     assert term.exit_code() == 0
     assert "bye" in term.output() and "Traceback" not in term.output()
+
+
+UP, LEFT, ENTER = "\x1b[A", "\x1b[D", "\r"
+
+
+def test_a_terminal_gets_line_editing_history_and_news_above_the_prompt(
+        ros_processes, client, tmp_path, teaching_file):
+    """On a (pseudo-)terminal: readline's arrows and a history kept across sessions, and a
+    line from the graph printed above the prompt without losing what is being typed."""
+    from sgim_msgs.msg import RunStatus
+    from sgim_ros import qos
+
+    history = tmp_path / "history"
+    history.write_text("list\n")  # what a previous session typed
+    ros_processes.env = {**ros_processes.env, "SGIM_TEACHER_HISTORY": str(history),
+                         "TERM": "xterm"}
+    status = client.node.create_publisher(RunStatus, "/run_status", qos.RECORDS)
+    master, slave = pty.openpty()
+    try:
+        child = ros_processes.start(
+            "human_input_tty", [PYTHON, "-m", "teacher.human_input_node", "--ros-args", "-p",
+                                f"teaching_set:={teaching_file}"],
+            stdin=slave, stdout=slave, stderr=slave, cwd=tmp_path)
+    finally:
+        os.close(slave)
+    try:
+        term = Terminal(child, client, tty=master)
+        term.wait_for(PROMPT)
+        # Up recalls the previous session's line; Enter runs it.
+        reply = term.wait_for(PROMPT, term.type(UP, end=ENTER))
+        assert "4 of 4 teaching goals not reached" in reply
+        # Left arrows move in the line: "sttus" corrected to "status".
+        reply = term.wait_for(PROMPT, term.type("sttus" + 3 * LEFT + "a", end=ENTER))
+        assert "movements: 0" in reply
+        assert "^[[" not in term.output()  # no arrow key printed as garbage
+        # News from the run while "li" is half typed: above the prompt, which is redrawn with
+        # the typed text, so finishing the line still runs "list".
+        assert client.spin_until(lambda: status.get_subscription_count() > 0)
+        start = term.type("li", end="")
+        term.wait_for("li", start)
+        status.publish(RunStatus(state=RunStatus.STATE_RUNNING, movement_index=5,
+                                 total_movements=10, message="running"))
+        before = term.wait_for("progress: movement 5/10 (50 %)", start)
+        term.wait_for(f"[movements 5/10 | error - | demos 0] {PROMPT}li", start + len(before))
+        assert before.endswith("\r\x1b[K")  # the line being typed was cleared first
+        reply = term.wait_for(PROMPT, term.type("st", end=ENTER))
+        assert "4 of 4 teaching goals not reached" in reply
+        start = term.type("quit", end=ENTER)
+        assert term.exit_code() == 0, term.output()
+        assert "bye" in term.output(start) and "Traceback" not in term.output()
+    finally:
+        os.close(master)
+    lines = history.read_text().splitlines()  # kept for the next session
+    assert lines[0] == "list" and lines[-3:] == ["status", "list", "quit"]

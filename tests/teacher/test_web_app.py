@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import http.client
 import json
+import socket
 import urllib.error
 import urllib.request
 
@@ -149,5 +150,24 @@ def test_the_server_refuses_what_a_foreign_page_could_send():
             reply.read()
         connection.close()
         assert _request(f"{base}/cast.gif", headers=token)[0] == 404
+    finally:
+        server.stop()
+
+
+def test_on_every_interface_the_token_is_the_key_whatever_name_the_teacher_uses():
+    """A teacher on another machine reaches the server by this machine's name or address:
+    any Host is accepted there, with the token and only with it."""
+    server = TeacherServer("0.0.0.0", 0, "a-token-of-sixteen+", FakeApi())
+    server.start()
+    try:
+        assert server.url == (f"http://{socket.gethostname()}:{server.port}/"
+                              "?token=a-token-of-sixteen+")
+        base = f"http://127.0.0.1:{server.port}"
+        for name in ("teacher-pc.example", "192.0.2.7", socket.gethostname()):
+            host = {"Host": f"{name}:{server.port}"}
+            assert _request(f"{base}/api/state", headers=host)[0] == 401
+            status, _ = _request(f"{base}/api/state",
+                                 headers={**host, "X-Teacher-Token": "a-token-of-sixteen+"})
+            assert status == 200
     finally:
         server.stop()

@@ -69,7 +69,8 @@ def main(argv: list[str] | None = None) -> int:
     source.add_argument("--teaching-index", type=int, metavar="N",
                         help="entry N of the teaching set (see --teaching-set)")
     p.add_argument("--teaching-set", help="teaching-set .npz (default: the packaged one)")
-    p.add_argument("--out", required=True, help="the GIF to write")
+    p.add_argument("--out", required=True, help="the GIF to write (.gif; no MP4 encoder is "
+                   "installed, so other formats are refused)")
     p.add_argument("--seed", type=int, default=0, help="the world's noise seed (default 0)")
     p.add_argument("--size", type=parse_size, default=(320, 240),
                    help="WIDTHxHEIGHT of each of the two views (default 320x240)")
@@ -81,6 +82,9 @@ def main(argv: list[str] | None = None) -> int:
     if not 1 <= args.fps <= 60 or not 0.25 <= args.slow <= 20:
         p.error("--fps must be in [1, 60] and --slow in [0.25, 20]")
     try:
+        if Path(args.out).suffix.lower() != ".gif":
+            raise BadInput(f"--out {args.out}: render_cast writes animated GIFs only, name the "
+                           "file *.gif")
         if args.action is not None:
             action = load_action(args.action)
         else:

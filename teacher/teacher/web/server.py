@@ -9,7 +9,9 @@ Safety, since a page on another site could otherwise talk to it from the teacher
 - it listens on 127.0.0.1 unless told otherwise; another interface needs an access token
   (``serve`` refuses without one), given as ``?token=`` in the page's address and sent by the
   page as the ``X-Teacher-Token`` header;
-- every request's Host header must name this server (no DNS rebinding);
+- on loopback, every request's Host header must name this server (no DNS rebinding); on
+  another interface the Host is whatever name the teacher's machine uses for this one, and
+  the token (which a rebinding page cannot know) is what keeps strangers out;
 - commands need the ``X-Teacher: 1`` header and a JSON body, which a cross-site form cannot
   send and a cross-site script cannot send without a CORS preflight this server never grants.
 
@@ -24,6 +26,7 @@ import hmac
 import ipaddress
 import json
 import logging
+import socket
 import threading
 from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
@@ -36,6 +39,7 @@ CONTENT_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; c
                  ".css": "text/css; charset=utf-8", ".png": "image/png", ".gif": "image/gif"}
 MAX_BODY = 64 * 1024
 MIN_TOKEN = 16
+WILDCARDS = ("0.0.0.0", "::")  # listen on every interface
 
 log = logging.getLogger(__name__)
 
@@ -85,6 +89,7 @@ class TeacherServer(ThreadingHTTPServer):
             raise Refused(f"cannot listen on {host}:{port}: {error.strerror or error}") from None
         self.host = host
         self.port = self.server_address[1]
+        self.check_host = is_loopback(host)
         names = {f"{host}:{self.port}", f"127.0.0.1:{self.port}", f"localhost:{self.port}",
                  f"[::1]:{self.port}"}
         self.allowed_hosts = {n.lower() for n in names}
@@ -92,7 +97,9 @@ class TeacherServer(ThreadingHTTPServer):
 
     @property
     def url(self) -> str:
-        host = f"[{self.host}]" if ":" in self.host else self.host
+        """The page's address; on every interface (0.0.0.0, ::), by this machine's name."""
+        host = socket.gethostname() if self.host in WILDCARDS else self.host
+        host = f"[{host}]" if ":" in host else host
         address = f"http://{host}:{self.port}/"
         return f"{address}?token={self.token}" if self.token else address
 
@@ -120,7 +127,7 @@ class Handler(BaseHTTPRequestHandler):
 
     def _allowed(self) -> bool:
         host = (self.headers.get("Host") or "").lower()
-        if host not in self.server.allowed_hosts:
+        if self.server.check_host and host not in self.server.allowed_hosts:
             self._send_json({"ok": False, "message": f"unknown host {host!r}"},
                             HTTPStatus.FORBIDDEN)
             return False
