@@ -4,7 +4,7 @@ Each run is one `run_experiment` (its own ROS domain, its own bag) in <runs-dir>
 seed<N>. Finished runs are skipped, so an interrupted study resumes where it stopped; a run
 that did not finish is started again from scratch. Progress is shown per run and overall.
 
-    ros_ws/run_study.sh                       # 4 learners x 10 seeds x 5000 movements
+    ros_ws/run_study.sh                       # 5 learners x 10 seeds x 5000 movements
     ros_ws/run_study.sh --seeds 3 --movements 1000 --parallel 2
 """
 
@@ -69,7 +69,7 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         description="Run learners x seeds through the node graph (the paper's comparison), "
                     "resumable: finished runs are skipped.")
     p.add_argument("--learners", nargs="+", choices=LEARNER_NAMES, default=list(LEARNER_NAMES),
-                   help="learners to run (default: all four)")
+                   help="learners to run (default: all five)")
     p.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 (default: 10)")
     p.add_argument("--first-seed", type=int, default=0, help="first seed (default: 0)")
     p.add_argument("--movements", type=int, default=5000,
