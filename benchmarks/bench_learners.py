@@ -93,7 +93,7 @@ def floor(name: str, kind: str, casts: int = 100) -> tuple[float, np.ndarray]:
             from sim_bridge.data_files import load_floor
         except ImportError:
             return float("nan"), np.empty(0)
-        per_goal = np.asarray(load_floor(), float).ravel()
+        per_goal = np.asarray(load_floor().per_goal, float).ravel()
         return float(per_goal.mean()), per_goal
     noisy = ARMS[name].make(123)
     actions, goals = goals_for(name, kind)
@@ -134,7 +134,8 @@ def run_one(job: tuple) -> dict:
     world.goals = goals_for(name, goal_kind)[1]
     learner = make_learner(learner_name, world.env.action_dim, world.env.outcome_dim, seed,
                            config, world.scale)
-    probe = Probe(learner) if isinstance(learner, GoalBabblingLearner) else None
+    forward = ARMS[name].make(0, noise=0.0).forward if name in ARMS else None
+    probe = Probe(learner, forward) if isinstance(learner, GoalBabblingLearner) else None
     start = time.perf_counter()
     curve = run(learner, world, movements, eval_every, seed, lambda record: None)
     out = {"world": name, "learner": learner_name, "seed": seed, "curve": curve,
@@ -219,6 +220,11 @@ def report(results: list[dict], floors: dict[str, float], movements: int,
                   f"{avg('no_outcome_share'):.2f}), start {avg('start_distance_mean'):.4f} "
                   f"-> best {avg('best_distance_mean'):.4f}; interest real "
                   f"{avg('interest_real'):.4f} vs shuffled {avg('interest_shuffled'):.4f}")
+            if "true_gain_mean" in probes[0]:
+                print(f"  {'':14s} without noise (arms): gain on memory "
+                      f"{avg('true_gain_mean'):+.4f} (positive in "
+                      f"{avg('true_gain_positive_share'):.2f}; goals in reachable space "
+                      f"{avg('true_gain_reachable_mean'):+.4f})")
             print(f"  {'':14s} mode-1 goals in never-reachable space per {FRAME}: "
                   + " ".join(f"{s:.2f}" for s in shares)
                   + f"  (area share {probes[0]['unreachable_area_share']:.2f})")

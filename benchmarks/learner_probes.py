@@ -2,7 +2,8 @@
 
 They answer the questions of issue 10 with measurements rather than final errors alone:
 - does a goal attempt gain on memory (end closer to its goal than memory's closest outcome
-  was before it)?
+  was before it)? On the arms also without noise: a stored outcome is the luckiest of many
+  noisy casts near the goal, so its noisy distance flatters memory;
 - how often does the learner explore, and how far from what it knows are its goals?
 - is the interest signal or noise (real interest against the interest of each leaf's window
   in shuffled order)?
@@ -12,6 +13,7 @@ Nothing here changes what the learner does: the probe only reads the finished pr
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -32,6 +34,8 @@ class AttemptRecord:
     best_distance: float
     movements: int
     competence: float
+    true_start: float = float("nan")  # noise-free distances (analytic worlds only)
+    true_best: float = float("nan")
 
 
 @dataclass
@@ -39,23 +43,53 @@ class Probe:
     """Attach to a GoalBabblingLearner; records every finished attempt and imitation."""
 
     learner: GoalBabblingLearner
+    forward: Callable[[np.ndarray], np.ndarray] | None = None
+    """The world's noise-free forward model, if it has one (the arms): then every attempt is
+    also measured without noise, from memory's closest pair's ACTION before the attempt to the
+    attempt's best action, free of the luck a stored noisy outcome carries."""
     attempts: list[AttemptRecord] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         original = self.learner._record_competence
+        original_new = self.learner._new_process
         learner = self.learner
+        forward = self.forward
+        tracked: dict[int, list] = {}  # id(attempt) -> [start action, best action, best cost]
+
+        def new_process() -> GoalAttempt | Imitation:
+            process = original_new()
+            if forward is not None and isinstance(process, GoalAttempt) and len(learner.memory):
+                _, rows = learner.memory.nearest(process.goal, 1)
+                start = learner.memory.actions[int(np.ravel(rows)[0])].copy()
+                tracked[id(process)] = [start, None, float("inf")]
+                observe = process.observe
+
+                def observe_and_track(action, result, process=process, observe=observe):
+                    before = process.best_distance
+                    observe(action, result)
+                    if process.best_distance < before:
+                        tracked[id(process)][1] = np.asarray(action, float).copy()
+                process.observe = observe_and_track  # type: ignore[method-assign]
+            return process
 
         def record(process: GoalAttempt | Imitation) -> float:
             comp = original(process)
             is_attempt = isinstance(process, GoalAttempt)
+            true_start = true_best = float("nan")
+            track = tracked.pop(id(process), None)
+            if track is not None and track[1] is not None:
+                goal = np.asarray(process.goal, float)
+                true_start = float(np.linalg.norm(forward(track[0]) - goal))
+                true_best = float(np.linalg.norm(forward(track[1]) - goal))
             self.attempts.append(AttemptRecord(
                 learner.n_movements, learner.last_goal_mode if is_attempt else 4,
                 np.asarray(process.goal, float).copy(), is_attempt and process.explore,
                 float(process.start_distance), float(process.best_distance),
-                process.movements, comp))
+                process.movements, comp, true_start, true_best))
             return comp
 
         learner._record_competence = record  # type: ignore[method-assign]
+        learner._new_process = new_process  # type: ignore[method-assign]
 
     def summary(self, frame: int, total: int, unreachable: ReachMap | None) -> dict:
         """Gain on memory is start distance - best distance of the goal-directed attempts that
@@ -82,6 +116,14 @@ class Probe:
             reach = np.array([unreachable.share(a.goal[None]) == 0.0 for a in landed])
             out["gain_reachable_mean"] = mean(gains[reach])
             out["gain_unreachable_mean"] = mean(gains[~reach])
+        true = [a for a in landed if np.isfinite(a.true_best)]
+        if true:
+            true_gains = np.array([a.true_start - a.true_best for a in true])
+            out["true_gain_mean"] = mean(true_gains)
+            out["true_gain_positive_share"] = mean(true_gains > 0)
+            if unreachable is not None:
+                reach = np.array([unreachable.share(a.goal[None]) == 0.0 for a in true])
+                out["true_gain_reachable_mean"] = mean(true_gains[reach])
         real, shuffled, corr = interest_against_shuffled(self.learner)
         out.update(interest_real=real, interest_shuffled=shuffled, interest_corr=corr)
         if unreachable is not None:
