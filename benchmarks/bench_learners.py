@@ -45,6 +45,10 @@ from sgim_nodes.core.planar_arm import ARMS, reach_of  # noqa: E402
 from sgim_nodes.core.runner import World, build_world, run  # noqa: E402
 
 LEARNERS = ("random", "random-goals", "saggriac", "sgim-d")
+ORACLE = "random-goals-reachable"
+"""A diagnostic, not a learner of the project: random-goals whose goals are redrawn until they
+fall in reachable space (the benchmark's reach map, an oracle no real learner has). It asks
+whether goals in unreachable space help or hurt goal babbling."""
 WORLDS = (*ARMS, "fishing")
 FRAME = 500
 
@@ -132,8 +136,11 @@ def run_one(job: tuple) -> dict:
     config = LearnerConfig(**overrides)
     world = build_world(name, seed)
     world.goals = goals_for(name, goal_kind)[1]
-    learner = make_learner(learner_name, world.env.action_dim, world.env.outcome_dim, seed,
-                           config, world.scale)
+    learner = make_learner("random-goals" if learner_name == ORACLE else learner_name,
+                           world.env.action_dim, world.env.outcome_dim, seed, config,
+                           world.scale)
+    if learner_name == ORACLE:
+        restrict_to_reachable(learner, REACH[name] if name in REACH else reach_map(name))
     forward = ARMS[name].make(0, noise=0.0).forward if name in ARMS else None
     probe = Probe(learner, forward) if isinstance(learner, GoalBabblingLearner) else None
     start = time.perf_counter()
@@ -148,6 +155,19 @@ def run_one(job: tuple) -> dict:
 
 
 REACH: dict[str, ReachMap] = {}
+
+
+def restrict_to_reachable(learner: GoalBabblingLearner, reach: ReachMap) -> None:
+    """Redraw the learner's goals until one falls in reachable space (the ORACLE diagnostic)."""
+    sample = learner.selector.sample
+
+    def reachable_sample(rng: np.random.Generator):
+        while True:
+            choice = sample(rng)
+            if reach.share(np.asarray(choice.goal, float)[None]) == 0.0:
+                return choice
+
+    learner.selector.sample = reachable_sample  # type: ignore[method-assign]
 
 
 def _init(names: list[str]) -> None:
@@ -199,7 +219,7 @@ def report(results: list[dict], floors: dict[str, float], movements: int,
         if demos:
             print(f"demonstrations per sgim-d run: {demos}")
         print("Welch tests (two-sided p):")
-        for a, b in (("random-goals", "random"), ("saggriac", "random"),
+        for a, b in (("random-goals", "random"), ("saggriac", "random"), (ORACLE, "random-goals"),
                      ("saggriac", "random-goals"), ("sgim-d", "saggriac")):
             if a in finals and b in finals:
                 ma, mb = np.mean(finals[a]), np.mean(finals[b])
@@ -278,7 +298,8 @@ def main(argv: list[str] | None = None) -> int:
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--worlds", nargs="+", choices=WORLDS, default=list(ARMS),
                    help="analytic arms by default; 'fishing' runs the pybullet world (slow)")
-    p.add_argument("--learners", nargs="+", choices=LEARNERS, default=list(LEARNERS))
+    p.add_argument("--learners", nargs="+", choices=(*LEARNERS, ORACLE), default=list(LEARNERS),
+                   help=f"{ORACLE} is a diagnostic: random goals redrawn until reachable")
     p.add_argument("--seeds", type=int, default=10)
     p.add_argument("--movements", type=int, default=5000)
     p.add_argument("--eval-every", type=int, default=250)
