@@ -266,12 +266,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         means = run(learner, world, args.movements, args.eval_every, args.seed, write,
                     args.teacher_period, args.teacher_tolerance_noise, progress=bar.update,
                     teacher_rule=args.teacher_rule)
+        demos = learner.memory.labels.count("demonstration")
+        turns = len(range(0, args.movements, args.teacher_period)) if learner.social else 0
         write({"type": "end", "final_mean_distance": means[-1], "n_memory": len(learner.memory),
-               "n_demonstrations": learner.memory.labels.count("demonstration"),
+               "n_demonstrations": demos, "n_teacher_turns": turns,
                "n_failures": learner.n_failures, "elapsed_s": time.perf_counter() - start})
     if not args.quiet:
-        demos = learner.memory.labels.count("demonstration")
-        print(f"{args.learner}: final mean distance {means[-1]:.4f}, {demos} demonstrations "
+        taught = (f"{demos} demonstrations in {turns} teacher turns ({args.teacher_rule} rule)"
+                  if learner.social else "no teacher")
+        print(f"{args.learner}: final mean distance {means[-1]:.4f}, {taught} "
               f"-> {args.output}", file=sys.stderr)
     return 0
 
