@@ -1,16 +1,27 @@
 """teacher: the automatic teacher, one demonstration every P movements.
 
-It follows the learner through the movement stream (the outcomes of its own movements, see
-core/teaching.py, and the count) and, at the run's start and at every P-th movement, publishes
-a demonstration drawn by the core Teacher among the teaching-set goals the learner has not
-reached by itself, or an empty one when every goal is reached, so that an arbiter waiting at
-that boundary goes on. Its random stream "teacher"
-makes its choices those of the single-process runner for the same seed.
+At the run's start and at every P-th movement it publishes a demonstration drawn by the core
+Teacher among the teaching-set goals the learner has not reached, or an empty one when every
+goal is reached, so that an arbiter waiting at that boundary goes on. "Reached" follows
+`reached_rule` (core/teaching.py):
+  ability        (default) the learner's inverse model, asked for the goal now, gives an
+                 action whose cast lands within the tolerance of it. The teacher mirrors the
+                 learner's memory as the evaluator does (the movement stream, its own
+                 demonstrations placed where the learner took them, and any other teacher's
+                 from `demonstrations_taken`), builds the same inverse model, and casts in its
+                 OWN fishing world (seeded by the run's stream "teacher-world"): casts that
+                 are never published, stored or counted.
+  own-movements  one of the learner's own movements (goal-directed, exploration, random)
+                 landed within the tolerance of it.
+Its random stream "teacher" and its world's stream make its choices those of the
+single-process runner for the same seed.
 
 Interfaces:
-  subscribes  movements, run_status
+  subscribes  movements, demonstrations_taken, run_status
   publishes   demonstrations (sgim_msgs/Demonstration)
-Parameters: seed, demonstration_period, tolerance_noise, outcome_noise, teaching_set.
+Parameters: the common ones, the memory and inverse-model fields of LearnerConfig,
+demonstration_period, reached_rule, tolerance_noise, noise (of the teacher's own world),
+teaching_set, movements.
 """
 
 from __future__ import annotations
@@ -18,92 +29,118 @@ from __future__ import annotations
 import numpy as np
 from rclpy.node import Node
 
-from sgim_msgs.msg import Demonstration, Movement, RunStatus
+from sgim_msgs.msg import Demonstration, RunStatus
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.bag.validation import Limits, LiveGate
-from sgim_nodes.core.environment import PROCESS_CODES
-from sgim_nodes.core.random_streams import component_rng
+from sgim_nodes.core.learners import inverse_or_centre
+from sgim_nodes.core.random_streams import component_rng, world_seed
 from sgim_nodes.core.teaching import (
+    ABILITY,
+    DEFAULT_REACHED_RULE,
     DEFAULT_TOLERANCE_NOISE,
     OWN_PROCESSES,
     PAPER_PERIOD,
+    REACHED_RULES,
     Teacher,
+    learner_progress,
 )
-from sgim_nodes.nodes.ros_glue import floats, run_node, vec
+from sgim_nodes.nodes.movement_memory import MovementMemory
+from sgim_nodes.nodes.ros_glue import (
+    declare_learner,
+    floats,
+    learner_node_params,
+    run_node,
+    vec,
+)
 from sgim_ros import qos
-from sgim_ros.params import Param, at_least, declare, non_negative, positive
+from sgim_ros.params import Param, ParameterError, at_least, non_negative, one_of
 from sim_bridge.data_files import load_teaching_set
-from sim_bridge.scaling import OUTCOME_NOISE
+from sim_bridge.fishing_world import DEFAULT_NOISE, FishingWorld
 
-OWN_CODES = {PROCESS_CODES[label] for label in OWN_PROCESSES}
-PARAMS = (
-    Param("seed", 0, "seed of the run (the teacher uses its stream 'teacher')", at_least(0)),
+AUTOMATIC = "automatic"  # Demonstration.source of this node's demonstrations
+PARAMS = learner_node_params(
     Param("demonstration_period", PAPER_PERIOD, "movements between demonstrations",
           at_least(1)),
+    Param("reached_rule", DEFAULT_REACHED_RULE, "when a teaching goal counts as reached: "
+          "'ability' (the learner's inverse model cast for it lands within the tolerance) or "
+          "'own-movements' (one of its own movements landed there); core/teaching.py",
+          one_of(*REACHED_RULES)),
     Param("tolerance_noise", DEFAULT_TOLERANCE_NOISE, "a teaching goal counts as reached "
           "within this many units of the world's outcome noise", non_negative),
-    Param("outcome_noise", OUTCOME_NOISE, "the world's outcome noise (outcome units)",
-          positive),
+    Param("noise", DEFAULT_NOISE, "motor-command noise of the teacher's own world (the "
+          "'ability' rule casts there)", non_negative),
     Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one"),
     Param("movements", 0, "the run's movement budget, to validate run statuses (0: unknown)",
           non_negative),
-    Param("resume_from", "", "run folder to resume (see sgim_nodes/bag/resume.py)"),
-    Param("resume_segments", 0, "how many of its recordings to read (0: all)", at_least(0)),
 )
 
 
 class TeacherNode(Node):
     def __init__(self) -> None:
         super().__init__("teacher")
-        p = declare(self, PARAMS)
+        p, config = declare_learner(self, PARAMS)
         ts = load_teaching_set(p["teaching_set"] or None)
+        if ts.actions.shape[1] != p["action_size"] or ts.outcomes.shape[1] != p["outcome_size"]:
+            raise ParameterError(f"teaching set of {ts.actions.shape[1]}-number actions and "
+                                 f"{ts.outcomes.shape[1]}-number outcomes does not fit "
+                                 f"action_size {p['action_size']}, outcome_size "
+                                 f"{p['outcome_size']}")
         self.teacher = Teacher(ts.actions, ts.outcomes, component_rng(p["seed"], "teacher"),
                                p["demonstration_period"],
                                p["tolerance_noise"] * p["outcome_noise"])
-        self.reached: list[np.ndarray] = []
+        self.rule = p["reached_rule"]
+        self.action_size = p["action_size"]
+        self.world = (FishingWorld(seed=world_seed(p["seed"], "teacher-world"),
+                                   noise=p["noise"]) if self.rule == ABILITY else None)
         self.total: int | None = None
         self.given = 0
         self.answered: set[int] = set()
         # Valid records only (bag/validation.py): a rogue movement moves neither the count
-        # nor what the learner has reached; a rogue run status does not end the teaching.
-        self.gate = LiveGate(self.get_logger().error, Limits(
-            action_size=ts.actions.shape[1], outcome_size=ts.outcomes.shape[1],
-            budget=p["movements"], teaching_set_size=len(ts.actions)))
-        self._latest_row: int | None = None  # where movement `count` is in `reached`
+        # nor the mirrored memory; a rogue run status does not end the teaching.
+        limits = Limits(action_size=ts.actions.shape[1], outcome_size=ts.outcomes.shape[1],
+                        budget=p["movements"], teaching_set_size=len(ts.actions))
+        self.gate = LiveGate(self.get_logger().error, limits)
+        self.memory = MovementMemory(self, config, p["action_size"], p["outcome_size"], limits)
+        self.memory.after_store.append(lambda _msg: self._maybe_teach())
         if p["resume_from"]:
-            point = resume_point(p["resume_from"], limit=p["resume_segments"])
-            self.reached = list(point.own_outcomes)
-            self.gate.movements.count, self.answered = point.count, set(point.demonstration_turns)
+            point = resume_point(p["resume_from"], config, p["resume_segments"])
+            self.memory.resume(point)
+            self.answered = set(point.demonstration_turns)
             self.given = point.demonstrations_given
         self._out = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
-        self.create_subscription(Movement, "movements", self._on_movement, qos.RECORDS)
+        self.create_subscription(Demonstration, "demonstrations_taken", self._on_taken,
+                                 qos.RECORDS)
         self.create_subscription(RunStatus, "run_status", self._on_status, qos.RECORDS)
         self.get_logger().info(f"{len(ts.actions)} teaching entries, period "
-                               f"{p['demonstration_period']}")
+                               f"{p['demonstration_period']}, reached rule {self.rule}")
 
     @property
     def count(self) -> int:
-        return self.gate.movements.count
+        return self.memory.count
 
     def _on_status(self, msg: RunStatus) -> None:
         if self.gate.check("run_status", msg):
             return
         self.total = msg.total_movements
+        if msg.state == RunStatus.STATE_FINISHED:
+            self.get_logger().info(f"run finished: {self.given} demonstrations in "
+                                   f"{len(self.answered)} turns ({self.rule} rule)")
+            return
         self._maybe_teach()
 
-    def _on_movement(self, msg: Movement) -> None:
-        verdict = self.gate.admit_movement(msg)
-        if not verdict.ok:
+    def _on_taken(self, msg: Demonstration) -> None:
+        """Another teacher's demonstration the learner took enters the mirrored memory; this
+        teacher's own are stored when given (below), so that the judgement at a turn never
+        waits on a message."""
+        if self.gate.check("demonstrations_taken", msg) or msg.source == AUTOMATIC:
             return
-        ok = msg.status == Movement.STATUS_OK and msg.process in OWN_CODES
-        if verdict.supersedes and self._latest_row is not None:  # a re-execution replaces
-            del self.reached[self._latest_row]  # the latest movement's outcome
-        self._latest_row = None
-        if ok:
-            self._latest_row = len(self.reached)
-            self.reached.append(vec(msg.outcome))
-        if not verdict.supersedes:
-            self._maybe_teach()
+        if len(msg.action):
+            self.memory.add_demonstration_after(msg.movement_index, vec(msg.action),
+                                                vec(msg.outcome))
+
+    def _own_outcomes(self) -> np.ndarray:
+        labels = np.asarray(self.memory.memory.labels)
+        return self.memory.memory.outcomes[np.isin(labels, OWN_PROCESSES)]
 
     def _maybe_teach(self) -> None:
         k = self.count
@@ -112,19 +149,29 @@ class TeacherNode(Node):
         if not self.teacher.due(k):
             return
         self.answered.add(k)
-        reached = np.array(self.reached).reshape(-1, self.teacher.outcomes.shape[1])
+        model = self.memory.inverse_model
+        reached = learner_progress(
+            self.rule, lambda goal: inverse_or_centre(model, goal, self.action_size),
+            self._own_outcomes, self.world)
         demo = self.teacher.choose(reached)
         msg = Demonstration(stamp=self.get_clock().now().to_msg(), movement_index=k,
-                            teaching_set_index=-1, source="automatic")
+                            teaching_set_index=-1, source=AUTOMATIC)
         if demo is not None:
             self.given += 1
             msg.index, msg.teaching_set_index = self.given, demo.index
             msg.action, msg.outcome = floats(demo.action), floats(demo.outcome)
+            # The learner stores it right after movement k, as the single-process runner.
+            self.memory.add_demonstration_after(k, demo.action, demo.outcome)
             self.get_logger().info(f"demonstration {self.given} at movement {k}: entry "
                                    f"{demo.index}, outcome {np.round(demo.outcome, 3)}")
         else:
             self.get_logger().info(f"nothing left to demonstrate at movement {k}")
         self._out.publish(msg)
+
+    def destroy_node(self) -> None:
+        if self.world is not None:
+            self.world.close()
+        super().destroy_node()
 
 
 def main(args: list[str] | None = None) -> int:

@@ -34,6 +34,22 @@ def test_cli_writes_every_movement_and_evaluation(tmp_path):
     assert records[-1]["final_mean_distance"] == evals[-1]["mean_distance"]
 
 
+def test_cli_says_how_many_demonstrations_the_teacher_gave(tmp_path, capsys):
+    out = tmp_path / "run.jsonl"
+    assert runner.main(["--learner", "sgim-d", "--movements", "100", "--env", "planar-arm",
+                        "--eval-every", "0", "--output", str(out), "--teacher-period", "25",
+                        "--teacher-rule", "own-movements", "--teacher-tolerance-noise", "0"]) == 0
+    records = [json.loads(line) for line in out.read_text().splitlines()]
+    demos = [r for r in records if r["type"] == "demonstration"]
+    assert len(demos) == records[-1]["n_demonstrations"] == 4  # tolerance 0: never reached
+    assert records[-1]["n_teacher_turns"] == 4
+    assert records[0]["teacher"] == {"period": 25, "rule": "own-movements",
+                                     "tolerance_noise": 0.0}
+    assert "4 demonstrations in 4 teacher turns (own-movements rule)" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        runner.main(["--teacher-rule", "lucky", "--output", str(out)])
+
+
 def test_same_seed_same_file(tmp_path):
     def movements(path):
         runner.main(["--learner", "saggriac", "--movements", "40", "--seed", "3",

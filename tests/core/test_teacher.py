@@ -3,7 +3,16 @@
 import numpy as np
 import pytest
 
-from sgim_nodes.core.teaching import Teacher
+from sgim_nodes.core.learners import make_learner
+from sgim_nodes.core.planar_arm import PlanarArm
+from sgim_nodes.core.teaching import (
+    ABILITY,
+    DEFAULT_REACHED_RULE,
+    OWN_MOVEMENTS,
+    Teacher,
+    cast_distance,
+    learner_progress,
+)
 
 ACTIONS = np.array([[0.0, 0.0], [0.1, 0.1], [0.2, 0.2]])
 OUTCOMES = np.array([[0.0, 0.0], [0.5, 0.5], [-0.5, 0.5]])
@@ -58,10 +67,7 @@ def test_invalid_teacher():
         Teacher(ACTIONS, OUTCOMES, np.random.default_rng(0), period=0)
 
 
-def test_a_demonstrated_goal_stays_unreached_until_the_learners_own_movements_reach_it():
-    from sgim_nodes.core.learners import make_learner
-    from sgim_nodes.core.planar_arm import PlanarArm
-
+def test_own_movements_rule_a_demonstrated_goal_stays_unreached_until_its_own_movements_reach_it():
     arm = PlanarArm(seed=0)
     learner = make_learner("sgim-d", 12, 2, 0, None, arm.scale)
     goal_action = np.full(12, 0.3)
@@ -73,9 +79,12 @@ def test_a_demonstrated_goal_stays_unreached_until_the_learners_own_movements_re
         a, label = learner.next_action()
         assert label == "imitation"
         learner.observe(a, arm.execute(a))
-    assert t.choose(learner.own_outcomes()) is not None  # still unreached: shown again
+    def own_rule():
+        return learner_progress(OWN_MOVEMENTS, learner.inverse, learner.own_outcomes, None)
+
+    assert t.choose(own_rule()) is not None  # still unreached: shown again
     learner.memory.add(goal_action, goal, "goal_directed")  # its own goal-directed cast
-    assert t.choose(learner.own_outcomes()) is None
+    assert t.choose(own_rule()) is None
 
 
 def test_the_runner_keeps_teaching_while_a_goal_is_unreached():
@@ -91,3 +100,104 @@ def test_the_runner_keeps_teaching_while_a_goal_is_unreached():
     demos = [r for r in records if r["type"] == "demonstration"]
     assert [d["movement"] for d in demos] == list(range(0, 600, 50))
     assert json.dumps(demos[0])  # plain JSON
+
+
+def _learner_and_goal(arm):
+    """An SGIM-D learner on the arm and one teaching goal with the action that reaches it."""
+    learner = make_learner("sgim-d", 12, 2, 0, None, arm.scale)
+    goal_action = np.full(12, 0.3)
+    return learner, goal_action, arm.forward(goal_action)
+
+
+def test_ability_is_the_default_rule():
+    assert DEFAULT_REACHED_RULE == ABILITY
+
+
+def test_ability_keeps_teaching_a_goal_reached_once_by_luck_that_the_inverse_model_misses():
+    arm = PlanarArm(seed=0)  # the teacher's world, noise-free
+    learner, goal_action, goal = _learner_and_goal(arm)
+    t = Teacher(np.array([goal_action]), np.array([goal]), np.random.default_rng(0),
+                tolerance=0.05)
+    # One lucky landing: its own movement came down on the goal, but the action really
+    # lands far away (the world's noise carried it there once).
+    lucky_action = np.full(12, -0.4)
+    assert np.linalg.norm(arm.forward(lucky_action) - goal) > 0.5
+    learner.memory.add(lucky_action, goal, "goal_directed")
+    assert t.choose(learner_progress(OWN_MOVEMENTS, learner.inverse, learner.own_outcomes,
+                                     None)) is None  # the old rule: reached, silent
+    ability = learner_progress(ABILITY, learner.inverse, learner.own_outcomes, arm)
+    assert ability(goal) > 0.5  # the inverse model's cast misses it
+    assert [t.choose(ability).index for _ in range(3)] == [0, 0, 0]  # taught, again
+
+
+def test_ability_stops_teaching_a_goal_the_learner_can_reach():
+    arm = PlanarArm(seed=0)
+    learner, goal_action, goal = _learner_and_goal(arm)
+    other_action = np.full(12, -0.4)
+    t = Teacher(np.array([goal_action, other_action]),
+                np.array([goal, arm.forward(other_action)]), np.random.default_rng(0),
+                tolerance=0.05)
+    learner.memory.add(goal_action + 0.001, arm.forward(goal_action + 0.001), "goal_directed")
+    ability = learner_progress(ABILITY, learner.inverse, learner.own_outcomes, arm)
+    assert ability(goal) <= 0.05
+    assert {t.choose(ability).index for _ in range(20)} == {1}  # only the unreached one
+    learner.memory.add(other_action, arm.forward(other_action), "exploration")
+    assert t.choose(ability) is None
+
+
+def test_ability_casts_touch_neither_the_learners_memory_nor_its_world():
+    world = PlanarArm(seed=1, noise=0.02)
+    teacher_world = PlanarArm(seed=2, noise=0.02)
+    learner, goal_action, goal = _learner_and_goal(world)
+    for _ in range(30):
+        a, _label = learner.next_action()
+        learner.observe(a, world.execute(a))
+    before = (len(learner.memory), learner.n_movements, world.rng.bit_generator.state)
+    teacher_state = teacher_world.rng.bit_generator.state
+    t = Teacher(np.array([goal_action]), np.array([goal]), np.random.default_rng(0))
+    t.choose(learner_progress(ABILITY, learner.inverse, learner.own_outcomes, teacher_world))
+    assert (len(learner.memory), learner.n_movements, world.rng.bit_generator.state) == before
+    assert teacher_world.rng.bit_generator.state != teacher_state  # it cast in its own world
+
+
+def test_cast_distance_measures_a_landing_on_land_and_a_failure():
+    from types import SimpleNamespace
+
+    from sgim_nodes.core.environment import Status
+
+    class Land:  # every cast comes down on land at `touchdown` (None: never comes down)
+        action_dim, outcome_dim = 2, 2
+
+        def __init__(self, touchdown):
+            self.touchdown = touchdown
+
+        def execute(self, action):
+            return SimpleNamespace(outcome=None, status=Status.NO_CONTACT,
+                                   touchdown=self.touchdown)
+
+    goal = np.array([0.0, 0.0])
+    assert cast_distance(lambda g: g, Land(np.array([0.3, 0.4])))(goal) == pytest.approx(0.5)
+    assert cast_distance(lambda g: g, Land(None))(goal) == np.inf
+
+
+def test_the_runner_counts_no_teacher_cast_as_a_movement():
+    from sgim_nodes.core import runner
+
+    world = runner.build_world("arm-7", 0)
+    learner = runner.make_learner("sgim-d", world.env.action_dim, 2, 0, None, world.scale)
+    records: list[dict] = []
+    runner.run(learner, world, 300, 0, 0, records.append, teacher_period=50)
+    moves = [r for r in records if r["type"] == "movement"]
+    demos = [r for r in records if r["type"] == "demonstration"]
+    assert len(moves) == learner.n_movements == 300
+    assert len(learner.memory) == sum(m["outcome"] is not None for m in moves) + len(demos)
+    assert learner.memory.labels.count("demonstration") == len(demos) > 0
+
+
+def test_unknown_rule_is_refused():
+    from sgim_nodes.core import runner
+
+    world = runner.build_world("planar-arm", 0)
+    learner = runner.make_learner("sgim-d", 12, 2, 0, None, world.scale)
+    with pytest.raises(ValueError, match="reached rule"):
+        runner.run(learner, world, 10, 0, 0, lambda r: None, teacher_rule="lucky")

@@ -17,11 +17,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .environment import Environment, is_success
+from .environment import Environment, ResultLike, is_success
 
 # The evaluator's world gets the run's seed plus this, so its noise stream is the same in the
 # single-process runner and in the graph's evaluator node, and independent of the learner's.
 EVALUATION_SEED_OFFSET = 1_000_003
+
+
+def landing_point(result: ResultLike) -> np.ndarray | None:
+    """Where an execution came down: its outcome, else its touch-down (the fishing hook on
+    land), else None (a physics failure)."""
+    point = result.outcome if is_success(result) else getattr(result, "touchdown", None)
+    return None if point is None else np.asarray(point, dtype=float)
 
 
 @dataclass(frozen=True)
@@ -56,10 +63,9 @@ class Evaluator:
         failed = np.zeros(len(self.goals), dtype=bool)
         reached = np.full(self.goals.shape, np.nan)
         for i, goal in enumerate(self.goals):
-            result = self.env.execute(np.asarray(inverse(goal), dtype=float))
-            point = result.outcome if is_success(result) else getattr(result, "touchdown", None)
+            point = landing_point(self.env.execute(np.asarray(inverse(goal), dtype=float)))
             if point is not None:
-                reached[i] = np.asarray(point, dtype=float)
+                reached[i] = point
                 dist[i] = np.linalg.norm(reached[i] - goal)
             else:
                 failed[i] = True

@@ -12,7 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-STREAM_NAMES = ("goals", "explorer", "imitation", "random", "teacher")
+STREAM_NAMES = ("goals", "explorer", "imitation", "random", "teacher", "teacher-world")
+"""Appending a name keeps every earlier stream: child i of a SeedSequence does not depend on
+how many children are spawned."""
 
 
 def component_rng(seed: int, name: str) -> np.random.Generator:
@@ -23,6 +25,12 @@ def component_rng(seed: int, name: str) -> np.random.Generator:
         raise ValueError(f"seed must be >= 0, got {seed}")
     children = np.random.SeedSequence(seed).spawn(len(STREAM_NAMES))
     return np.random.default_rng(children[STREAM_NAMES.index(name)])
+
+
+def world_seed(seed: int, name: str) -> int:
+    """An integer seed for a world of its own (the worlds take an int), drawn from stream
+    `name` of run `seed`: e.g. the teacher's world, "teacher-world" (core/teaching.py)."""
+    return int(component_rng(seed, name).integers(2**31 - 1))
 
 
 @dataclass

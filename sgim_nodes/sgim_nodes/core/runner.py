@@ -27,9 +27,17 @@ from .environment import Environment, is_success
 from .evaluator import EVALUATION_SEED_OFFSET, Evaluator
 from .learners import LEARNER_NAMES, Learner, make_learner
 from .planar_arm import ARMS, PlanarArm, benchmark_goals, teaching_set
-from .random_streams import component_rng
+from .random_streams import component_rng, world_seed
 from .scale import WorldScale, unit_box
-from .teaching import DEFAULT_TOLERANCE_NOISE, Teacher
+from .teaching import (
+    ABILITY,
+    DEFAULT_REACHED_RULE,
+    DEFAULT_TOLERANCE_NOISE,
+    REACHED_RULES,
+    Teacher,
+    check_rule,
+    learner_progress,
+)
 
 ENV_NAMES = ("fishing", "planar-arm", *ARMS)
 EVALUATION = "evaluation"
@@ -43,6 +51,9 @@ class World:
     teaching_actions: np.ndarray | None
     teaching_outcomes: np.ndarray | None
     scale: WorldScale
+    # The teacher's own copy of the world (teaching.py, rule "ability"), built on demand:
+    # only a social learner's teacher casts in it.
+    make_teacher_env: Callable[[], Environment] | None = None
 
 
 def fishing_scale() -> WorldScale:
@@ -66,20 +77,26 @@ def build_world(name: str, seed: int, noise: float | None = None, arm_joints: in
     """
     if pond_radius is not None and name != "fishing":
         raise ValueError("pond_radius applies to the fishing world only")
+    teacher_seed = world_seed(seed, "teacher-world")
     if name == "planar-arm" or name in ARMS:
         if name == "planar-arm":
             kw = {} if noise is None else {"noise": noise}
-            env = PlanarArm(n_joints=arm_joints, seed=seed, **kw)
-            eval_env = PlanarArm(n_joints=arm_joints, seed=seed + EVALUATION_SEED_OFFSET, **kw)
+
+            def make(at_seed: int) -> Environment:
+                return PlanarArm(n_joints=arm_joints, seed=at_seed, **kw)
+
             cells: int | tuple[int, int] = arm_cells
         else:
             spec = ARMS[name]
-            env = spec.make(seed, noise)
-            eval_env = spec.make(seed + EVALUATION_SEED_OFFSET, noise)
+
+            def make(at_seed: int) -> Environment:
+                return spec.make(at_seed, noise)
+
             cells = spec.cells
+        env, eval_env = make(seed), make(seed + EVALUATION_SEED_OFFSET)
         ts = teaching_set(env, cells=cells)
         return World(env, eval_env, benchmark_goals(env, cells=cells), ts.actions,
-                     ts.outcomes, env.scale)
+                     ts.outcomes, env.scale, lambda: make(teacher_seed))
     if name == "fishing":
         from sim_bridge.data_files import load_benchmark_goals, load_teaching_set
         from sim_bridge.fishing_world import FishingWorld
@@ -93,7 +110,7 @@ def build_world(name: str, seed: int, noise: float | None = None, arm_joints: in
         return World(FishingWorld(seed=seed, **kw), eval_world,
                      np.asarray(load_benchmark_goals(), dtype=float),
                      np.asarray(ts.actions, dtype=float), np.asarray(ts.outcomes, dtype=float),
-                     fishing_scale())
+                     fishing_scale(), lambda: FishingWorld(seed=teacher_seed, **kw))
     raise ValueError(f"unknown env {name!r}; choose one of {ENV_NAMES}")
 
 
@@ -104,17 +121,36 @@ def _vec(x: np.ndarray | None) -> list[float] | None:
 def run(learner: Learner, world: World, movements: int, eval_every: int,
         seed: int, write: Callable[[dict[str, Any]], None],
         teacher_period: int = 150, teacher_tolerance_noise: float = DEFAULT_TOLERANCE_NOISE,
-        progress: Callable[[int], None] | None = None) -> list[float]:
+        progress: Callable[[int], None] | None = None,
+        teacher_rule: str = DEFAULT_REACHED_RULE) -> list[float]:
     """Drive ``learner`` for ``movements`` movements; returns the evaluation means.
 
     Evaluations happen at 0, every ``eval_every`` movements and at the end.  Social learners
-    get a demonstration whenever the teacher is due (movements 0, P, 2P, ...).
+    get a demonstration whenever the teacher is due (movements 0, P, 2P, ...) and some
+    teaching goal is unreached under ``teacher_rule`` (core/teaching.py).
     """
-    teacher = None
+    check_rule(teacher_rule)
+    teacher, teacher_env = None, None
     if learner.social and world.teaching_actions is not None:
         teacher = Teacher(world.teaching_actions, world.teaching_outcomes,
                           component_rng(seed, "teacher"), teacher_period,
                           teacher_tolerance_noise * world.scale.noise)
+        if teacher_rule == ABILITY:
+            if world.make_teacher_env is None:
+                raise ValueError("the teacher's 'ability' rule needs world.make_teacher_env")
+            teacher_env = world.make_teacher_env()
+    try:
+        return _run(learner, world, movements, eval_every, write, teacher, teacher_rule,
+                    teacher_env, progress)
+    finally:
+        if teacher_env is not None and hasattr(teacher_env, "close"):
+            teacher_env.close()
+
+
+def _run(learner: Learner, world: World, movements: int, eval_every: int,
+         write: Callable[[dict[str, Any]], None], teacher: Teacher | None, teacher_rule: str,
+         teacher_env: Environment | None, progress: Callable[[int], None] | None
+         ) -> list[float]:
     evaluator = Evaluator(world.eval_env, world.goals, world.scale.diagonal)
     means: list[float] = []
 
@@ -128,7 +164,8 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
             evaluate(i)
         if teacher is not None and teacher.due(i):
             learner.on_teacher_turn()
-            demo = teacher.choose(learner.own_outcomes())
+            demo = teacher.choose(learner_progress(teacher_rule, learner.inverse,
+                                                   learner.own_outcomes, teacher_env))
             if demo is not None:
                 learner.on_demonstration(demo.action, demo.outcome)
                 write({"type": "demonstration", "movement": i, "teaching_index": demo.index,
@@ -173,12 +210,22 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                    help="planar-arm: number of joints (default: %(default)s)")
     p.add_argument("--teacher-period", type=int, default=150,
                    help="movements between demonstrations, paper: 150 (default: %(default)s)")
+    p.add_argument("--teacher-rule", choices=REACHED_RULES, default=DEFAULT_REACHED_RULE,
+                   help="when a teaching goal counts as reached (core/teaching.py): 'ability', "
+                        "the learner's inverse model cast for it lands within the tolerance; "
+                        "'own-movements', one of its own movements landed there "
+                        "(default: %(default)s)")
+    p.add_argument("--teacher-tolerance-noise", type=float, default=DEFAULT_TOLERANCE_NOISE,
+                   help="a teaching goal is reached within this many units of the world's "
+                        "outcome noise (default: %(default)s)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     args = p.parse_args(argv)
     if args.movements < 0:
         p.error("--movements must be >= 0")
     if args.eval_every < 0:
         p.error("--eval-every must be >= 0")
+    if args.teacher_tolerance_noise < 0:
+        p.error("--teacher-tolerance-noise must be >= 0")
     if args.pond_radius is not None and args.env != "fishing":
         p.error("--pond-radius needs --env fishing")
     return args
@@ -213,15 +260,21 @@ def main(argv: Sequence[str] | None = None) -> int:
                "outcome_dim": world.env.outcome_dim, "n_goals": len(world.goals),
                "scale": {"low": list(world.scale.low), "high": list(world.scale.high),
                          "noise": world.scale.noise},
+               "teacher": {"period": args.teacher_period, "rule": args.teacher_rule,
+                           "tolerance_noise": args.teacher_tolerance_noise},
                "config": config.to_dict()})
         means = run(learner, world, args.movements, args.eval_every, args.seed, write,
-                    args.teacher_period, progress=bar.update)
+                    args.teacher_period, args.teacher_tolerance_noise, progress=bar.update,
+                    teacher_rule=args.teacher_rule)
+        demos = learner.memory.labels.count("demonstration")
+        turns = len(range(0, args.movements, args.teacher_period)) if learner.social else 0
         write({"type": "end", "final_mean_distance": means[-1], "n_memory": len(learner.memory),
-               "n_demonstrations": learner.memory.labels.count("demonstration"),
+               "n_demonstrations": demos, "n_teacher_turns": turns,
                "n_failures": learner.n_failures, "elapsed_s": time.perf_counter() - start})
     if not args.quiet:
-        demos = learner.memory.labels.count("demonstration")
-        print(f"{args.learner}: final mean distance {means[-1]:.4f}, {demos} demonstrations "
+        taught = (f"{demos} demonstrations in {turns} teacher turns ({args.teacher_rule} rule)"
+                  if learner.social else "no teacher")
+        print(f"{args.learner}: final mean distance {means[-1]:.4f}, {taught} "
               f"-> {args.output}", file=sys.stderr)
     return 0
 

@@ -6,16 +6,28 @@ among the unreached goals", the teacher knowing the learner's state. So every ``
 movements (P = 150) the teacher gives one demonstration (action, outcome) drawn at random, with
 its own seeded Generator, among the teaching-set outcomes the learner has NOT reached.
 
-"Reached" is judged on what the learner can do by itself: a teaching goal is reached once one
-of the learner's OWN movements (goal-directed, exploration or random: ``OWN_PROCESSES``) lands
-within ``tolerance`` of it. Never the stored demonstration (it is in the learner's memory the
-moment it is shown, so judging on memory made every demonstrated goal reached at once and the
-teacher fell silent after about 1000 movements), and not the imitations either (repeating the
-teacher's action is not yet reaching the goal on one's own; the learner has integrated a
-demonstration once its own goal-directed movements land there). A demonstrated goal can thus be
-shown again until the learner reaches it itself. The tolerance is a multiple of the world's
-outcome noise (``DEFAULT_TOLERANCE_NOISE``). When every goal is reached the teacher gives
-nothing at that turn.
+"Reached" is judged on what the learner can do by itself, never on the stored demonstration
+(it is in the learner's memory the moment it is shown: judging on memory made every
+demonstrated goal reached at once and the teacher fell silent after about 1000 movements). The
+paper's teacher knows the learner's state, so it may ask the learner itself. Two rules
+(``REACHED_RULES``):
+
+- ``ability`` (the default): a teaching goal is reached when the learner's inverse model,
+  asked for that goal NOW, gives an action whose cast lands within ``tolerance`` of it. The
+  teacher casts in its OWN copy of the world (its own noise stream, "teacher-world" in
+  random_streams.py): these casts are not learner movements, never enter the learner's memory
+  and do not count against the budget, as the evaluator's casts. The inverse model reads the
+  learner's whole memory, demonstrations and imitations included, since the cast decides, not
+  a stored outcome. A goal reached once by luck but missed by the inverse model stays
+  unreached, and a goal the learner can no longer hit is taught again.
+- ``own-movements``: a teaching goal is reached once one of the learner's OWN movements
+  (goal-directed, exploration or random: ``OWN_PROCESSES``; not the demonstrations, not the
+  imitations) has landed within ``tolerance`` of it. One lucky landing suffices, so the
+  teacher ran out after 7 to 9 demonstrations in a 5000-movement fishing run (P = 150, 33
+  turns).
+
+The tolerance is a multiple of the world's outcome noise (``DEFAULT_TOLERANCE_NOISE``). When
+every goal is reached the teacher gives nothing at that turn.
 """
 
 from __future__ import annotations
@@ -25,12 +37,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .environment import Environment
+from .evaluator import landing_point
+
 PAPER_PERIOD = 150
 OWN_PROCESSES = ("goal_directed", "exploration", "random")
 """Process labels of the movements that show what the learner can do by itself."""
 DEFAULT_TOLERANCE_NOISE = 1.0
 """A teaching goal counts as reached within this many units of the world's outcome noise:
 closer than the noise, two outcomes cannot be told apart."""
+ABILITY = "ability"
+OWN_MOVEMENTS = "own-movements"
+REACHED_RULES = (ABILITY, OWN_MOVEMENTS)
+DEFAULT_REACHED_RULE = ABILITY
 
 
 @dataclass(frozen=True)
@@ -86,3 +105,34 @@ class Teacher:
             return None
         i = int(self.rng.choice(candidates))
         return Demonstration(i, self.actions[i].copy(), self.outcomes[i].copy())
+
+
+def check_rule(rule: str) -> str:
+    if rule not in REACHED_RULES:
+        raise ValueError(f"unknown reached rule {rule!r}; choose one of {REACHED_RULES}")
+    return rule
+
+
+def cast_distance(inverse: Callable[[np.ndarray], np.ndarray],
+                  world: Environment) -> Callable[[np.ndarray], float]:
+    """The ``ability`` rule's measure: goal -> how far from it the action ``inverse`` gives
+    for it lands when cast in ``world`` (the teacher's own). A cast that comes down on land
+    is measured to its touch-down, as the evaluator measures it; one that never comes down is
+    infinitely far."""
+    def distance(goal: np.ndarray) -> float:
+        point = landing_point(world.execute(np.asarray(inverse(goal), dtype=float)))
+        return np.inf if point is None else float(np.linalg.norm(point - goal))
+
+    return distance
+
+
+def learner_progress(rule: str, inverse: Callable[[np.ndarray], np.ndarray],
+                     own_outcomes: Callable[[], np.ndarray],
+                     world: Environment | None) -> Reached:
+    """What ``Teacher.choose`` judges on under ``rule``: the inverse model's casts in the
+    teacher's ``world`` (ability), or the outcomes of the learner's own movements."""
+    if check_rule(rule) == OWN_MOVEMENTS:
+        return own_outcomes()
+    if world is None:
+        raise ValueError("the 'ability' rule needs the teacher's own world to cast in")
+    return cast_distance(inverse, world)

@@ -31,7 +31,7 @@ class MovementMemory:
     """Subscribes `movements` on `node`; holds the Memory and InverseModel of the learner."""
 
     def __init__(self, node: Node, config: LearnerConfig, action_size: int,
-                 outcome_size: int) -> None:
+                 outcome_size: int, limits: Limits | None = None) -> None:
         self.node = node
         self.config = config
         self.action_size, self.outcome_size = action_size, outcome_size
@@ -39,7 +39,8 @@ class MovementMemory:
         self.count = 0  # the run's count: the latest valid learner movement
         self.before_store: list = []  # called with each learner Movement before it is stored
         self.after_store: list = []  # ... and after (then memory holds it)
-        self.gate = LiveGate(node.get_logger().error, Limits(action_size, outcome_size))
+        self.gate = LiveGate(node.get_logger().error,
+                             limits or Limits(action_size, outcome_size))
         self._latest_row: int | None = None  # memory row of movement `count`, if stored
         self._deferred: list[tuple[int, np.ndarray, np.ndarray]] = []
         self._waiters: list[tuple[int, Future]] = []

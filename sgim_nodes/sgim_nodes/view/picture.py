@@ -5,8 +5,9 @@ the teaching goals the learner has reached or not, the current goal, the error c
 movement count and the budget. The web teacher serves it to a page and the markers node turns
 it into MarkerArrays; both feed it messages and read it, nothing here imports ROS.
 
-"Reached" is the automatic teacher's rule, asked of its class (core.teaching.Teacher.unreached)
-on the learner's landed movements, so the page, the markers and the automatic teacher agree.
+"Reached" is asked of the teacher's class (core.teaching.Teacher.unreached) on the learner's
+landed movements, as a person teaching sees them; the automatic teacher's default rule
+(``ability``) casts the learner's inverse model instead, so the two can differ.
 Landings only grow: readers ask for what came after the landings they already have, which
 keeps a 5000-movement run cheap to follow.
 """
