@@ -43,6 +43,7 @@ from sgim_nodes.core.config import LearnerConfig  # noqa: E402
 from sgim_nodes.core.learners import GoalBabblingLearner, make_learner  # noqa: E402
 from sgim_nodes.core.planar_arm import ARMS, reach_of  # noqa: E402
 from sgim_nodes.core.runner import World, build_world, run  # noqa: E402
+from sgim_nodes.core.teaching import DEFAULT_REACHED_RULE, REACHED_RULES  # noqa: E402
 
 LEARNERS = ("random", "random-goals", "saggriac", "sgim-d")
 ORACLE = "random-goals-reachable"
@@ -132,7 +133,7 @@ def same_memory_line(world: World, learner, name: str, casts: int = 2) -> dict[s
 
 
 def run_one(job: tuple) -> dict:
-    name, learner_name, seed, movements, eval_every, goal_kind, overrides = job
+    name, learner_name, seed, movements, eval_every, goal_kind, overrides, rule = job
     config = LearnerConfig(**overrides)
     world = build_world(name, seed)
     world.goals = goals_for(name, goal_kind)[1]
@@ -144,7 +145,8 @@ def run_one(job: tuple) -> dict:
     forward = ARMS[name].make(0, noise=0.0).forward if name in ARMS else None
     probe = Probe(learner, forward) if isinstance(learner, GoalBabblingLearner) else None
     start = time.perf_counter()
-    curve = run(learner, world, movements, eval_every, seed, lambda record: None)
+    curve = run(learner, world, movements, eval_every, seed, lambda record: None,
+                teacher_rule=rule)
     out = {"world": name, "learner": learner_name, "seed": seed, "curve": curve,
            "final": curve[-1], "seconds": time.perf_counter() - start,
            "n_demonstrations": learner.memory.labels.count("demonstration"),
@@ -306,6 +308,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--goals", choices=("benchmark", "validation"), default="benchmark")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a LearnerConfig value for every learner (repeatable)")
+    p.add_argument("--teacher-rule", choices=REACHED_RULES, default=DEFAULT_REACHED_RULE,
+                   help="when the teacher counts a teaching goal as reached (core/teaching.py; "
+                        f"default {DEFAULT_REACHED_RULE})")
     p.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
     p.add_argument("--figure", type=Path, help="write the error curves to this PNG")
     p.add_argument("--json", type=Path, help="write every run's numbers to this file")
@@ -315,10 +320,10 @@ def main(argv: list[str] | None = None) -> int:
     floors = {}
     for name in args.worlds:
         floors[name], _ = floor(name, args.goals)
-    jobs = [(w, lr, s, args.movements, args.eval_every, args.goals, overrides)
+    jobs = [(w, lr, s, args.movements, args.eval_every, args.goals, overrides, args.teacher_rule)
             for w in args.worlds for lr in args.learners for s in range(args.seeds)]
     print(f"{len(jobs)} runs on {args.jobs} processes, goals: {args.goals}, overrides: "
-          f"{overrides or 'none'}", file=sys.stderr)
+          f"{overrides or 'none'}, teacher rule: {args.teacher_rule}", file=sys.stderr)
     with ProcessPoolExecutor(args.jobs, initializer=_init, initargs=(args.worlds,)) as pool:
         results = []
         for i, r in enumerate(pool.map(run_one, jobs), 1):
@@ -331,7 +336,8 @@ def main(argv: list[str] | None = None) -> int:
         figure(results, floors, args.eval_every, args.figure)
     if args.json:
         args.json.write_text(json.dumps({"floors": floors, "runs": results,
-                                         "overrides": overrides}, default=float))
+                                         "overrides": overrides,
+                                         "teacher_rule": args.teacher_rule}, default=float))
     return 0
 
 
