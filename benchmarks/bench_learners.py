@@ -252,6 +252,11 @@ def report(results: list[dict], floors: dict[str, float], movements: int,
                   + f"  (area share {probes[0]['unreachable_area_share']:.2f})")
 
 
+COLOURS = {"random": "tab:gray", "random-goals": "tab:purple", "saggriac": "tab:blue",
+           "sgim-d": "tab:red", ORACLE: "tab:olive"}
+"""The analysis' colours (analysis/figures.py), so every figure of a learner looks alike."""
+
+
 def figure(results: list[dict], floors: dict[str, float], eval_every: int, path: Path) -> None:
     import matplotlib
 
@@ -268,8 +273,9 @@ def figure(results: list[dict], floors: dict[str, float], eval_every: int, path:
             m = curves.mean(0)
             h = (stats.t.ppf(0.975, len(curves) - 1) * curves.std(0, ddof=1)
                  / np.sqrt(len(curves))) if len(curves) > 1 else 0 * m
-            ax.plot(x, m, label=lr)
-            ax.fill_between(x, m - h, m + h, alpha=0.2)
+            colour = COLOURS.get(lr, "tab:gray")
+            ax.plot(x, m, label=lr, color=colour)
+            ax.fill_between(x, m - h, m + h, alpha=0.2, color=colour)
         ax.axhline(floors[name], color="k", ls="--", lw=1, label="floor")
         ax.set(title=f"{name} ({len(rows) // max(1, len(set(r['learner'] for r in rows)))} "
                      "seeds)", xlabel="movements", ylabel="mean distance to test goals",
