@@ -26,6 +26,13 @@ from sim_bridge.scaling import OUTCOME_NOISE
 
 ACTION_SIZE = 24  # the fishing world's; a parameter of every node that checks sizes
 OUTCOME_SIZE = 2
+JOB_RESULT_SECONDS = 5
+"""How long a job server keeps a finished job's result (rclpy's default is 900 s). Every job's
+status stays in the action's status array for that long, and the array is republished, and
+deserialised by the arbiter, at every job's change of state: with 900 s a 5000-movement run
+carried thousands of finished jobs in each message, and the arbiter spent most of its CPU
+reading them (measured with py-spy; the graph took 3.6 times the runner's time). The arbiter
+asks for a job's result as soon as the job is accepted, so 5 s is ample."""
 
 
 class JobServer:
@@ -44,7 +51,7 @@ class JobServer:
         self._server = ActionServer(
             node, action_type, name, execute_callback=self._execute,
             goal_callback=lambda _: GoalResponse.REJECT if self.busy else GoalResponse.ACCEPT,
-            cancel_callback=lambda _: CancelResponse.ACCEPT)
+            cancel_callback=lambda _: CancelResponse.ACCEPT, result_timeout=JOB_RESULT_SECONDS)
 
     async def _execute(self, handle) -> Any:
         from sgim_nodes.nodes.sim_client import SimulatorError
