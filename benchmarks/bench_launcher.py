@@ -31,21 +31,9 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(REPO), str(REPO / "sgim_nodes")]
 
 from sgim_nodes.graph.domain import reserve_domain  # noqa: E402
+from sgim_nodes.graph.processes import run_node_pids  # noqa: E402
 
 RUN = str(REPO / "ros_ws" / "run_experiment.sh")
-
-
-def run_processes(run_dir: Path) -> list[int]:
-    found = []
-    for cmdline in Path("/proc").glob("[0-9]*/cmdline"):
-        try:
-            text = cmdline.read_bytes().replace(b"\0", b" ").decode(errors="replace")
-            state = (cmdline.parent / "stat").read_text().rsplit(")", 1)[1].split()[0]
-        except (OSError, IndexError):
-            continue
-        if str(run_dir) in text and "--params-file" in text and state not in ("Z", "X"):
-            found.append(int(cmdline.parent.name))
-    return found
 
 
 def movements_logged(run_dir: Path) -> bool:
@@ -67,20 +55,20 @@ def trial(tmp: Path, k: int, sig: signal.Signals, rng: random.Random) -> dict:
         time.sleep(0.1)
     time.sleep(rng.uniform(0.0, 3.0))
     domain = yaml.safe_load((run_dir / "metadata.yaml").read_text())["ros_domain_id"]
-    processes = len(run_processes(run_dir))
+    processes = len(run_node_pids(run_dir))
     stopped = time.monotonic()
     os.kill(launcher.pid, sig)
     launcher.wait(timeout=120)
     taken_while_alive = False
-    while run_processes(run_dir):
+    while run_node_pids(run_dir):
         with reserve_domain(preferred=domain) as other:
-            if other.domain_id == domain and run_processes(run_dir):
+            if other.domain_id == domain and run_node_pids(run_dir):
                 taken_while_alive = True
         if time.monotonic() - stopped > 120:
             break
         time.sleep(0.02)
     gone = time.monotonic() - stopped
-    left = run_processes(run_dir)
+    left = run_node_pids(run_dir)
     for pid in left:  # a failed trial must not leave them behind either
         os.kill(pid, signal.SIGKILL)
     meta = yaml.safe_load((run_dir / "metadata.yaml").read_text())

@@ -100,6 +100,14 @@ def _alive(pid: int) -> bool:
     return state not in ("Z", "X")
 
 
+def _ends_within(pid: int, seconds: float = 30) -> bool:
+    """Wait until the process is dead (or a zombie); False if it still lives after that."""
+    deadline = time.monotonic() + seconds
+    while _alive(pid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return not _alive(pid)
+
+
 @pytest.mark.ros
 @pytest.mark.parametrize("ignores_sigint", [False, True])
 def test_a_node_ends_when_its_launcher_is_killed(tmp_path, ignores_sigint):
@@ -116,10 +124,7 @@ def test_a_node_ends_when_its_launcher_is_killed(tmp_path, ignores_sigint):
         assert _alive(pid)
         os.kill(owner.pid, signal.SIGKILL)
         owner.wait(timeout=10)
-        deadline = time.monotonic() + 30
-        while _alive(pid) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        assert not _alive(pid), "the node outlived its launcher"
+        assert _ends_within(pid), "the node outlived its launcher"
     finally:
         with contextlib.suppress(ProcessLookupError):
             os.killpg(owner.pid, signal.SIGKILL)
@@ -159,10 +164,7 @@ def test_a_launcher_stops_its_run_when_the_study_that_started_it_is_killed(tmp_p
         assert _alive(pid) and "watching" in log.read_text()
         os.kill(owner.pid, signal.SIGKILL)
         owner.wait(timeout=10)
-        deadline = time.monotonic() + 30
-        while _alive(pid) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        assert not _alive(pid), "the launcher outlived its study"
+        assert _ends_within(pid), "the launcher outlived its study"
         assert "stopping the run as on SIGTERM" in log.read_text()
     finally:
         with contextlib.suppress(ProcessLookupError):

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 import yaml
 
+from sgim_nodes.graph.processes import run_node_pids
 from tests.conftest import REPO
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -20,20 +21,6 @@ pytestmark = [pytest.mark.ros, pytest.mark.slow]
 RUN = str(REPO / "ros_ws" / "run_experiment.sh")
 ROS2RUN = str(REPO / "ros_ws" / "ros2run.sh")
 SILENT = [sys.executable, str(REPO / "tests" / "ros" / "peers" / "silent_peer.py")]
-
-
-def node_pids(run_dir: Path) -> list[int]:
-    """Live processes started for this run (their command line names its parameter file)."""
-    pids = []
-    for cmdline in Path("/proc").glob("[0-9]*/cmdline"):
-        try:
-            text = cmdline.read_bytes().replace(b"\0", b" ").decode(errors="replace")
-            state = (cmdline.parent / "stat").read_text().rsplit(")", 1)[1].split()[0]
-        except (OSError, IndexError):
-            continue
-        if str(run_dir) in text and "--params-file" in text and state not in ("Z", "X"):
-            pids.append(int(cmdline.parent.name))
-    return pids
 
 
 def wait_for(condition, timeout: float, what: str, interval: float = 0.1):
@@ -81,16 +68,16 @@ def test_a_killed_launcher_leaves_no_node_and_holds_its_domain_until_they_end(
                    "--quiet", "--prefix", f"evaluator={linger}")
     wait_for(lambda: progress(run_dir) > 0, 120, "the run to make movements")
     domain = metadata(run_dir)["ros_domain_id"]
-    assert len(node_pids(run_dir)) >= 4, node_pids(run_dir)
+    assert len(run_node_pids(run_dir)) >= 4, run_node_pids(run_dir)
     os.kill(child.pid, signal.SIGKILL)
     child.communicate(timeout=30)
     held, deadline = 0, time.monotonic() + 60
-    while node_pids(run_dir):
+    while run_node_pids(run_dir):
         with reserve_domain(preferred=domain) as other:
-            if node_pids(run_dir):  # a process of the run still lives: not ours to take
+            if run_node_pids(run_dir):  # a process of the run still lives: not ours to take
                 assert other.domain_id != domain
                 held += 1
-        assert time.monotonic() < deadline, f"left behind: {node_pids(run_dir)}"
+        assert time.monotonic() < deadline, f"left behind: {run_node_pids(run_dir)}"
         time.sleep(0.1)
     assert held > 0
     with reserve_domain(preferred=domain) as again:
@@ -121,7 +108,7 @@ def test_ctrl_c_with_output_piped_stops_every_node(ros_processes, tmp_path):
     child.stdout.close()  # the reader (tee) is gone: every write now meets a broken pipe
     child.send_signal(signal.SIGINT)
     assert child.wait(timeout=120) == 130
-    assert not node_pids(run_dir)
+    assert not run_node_pids(run_dir)
     meta = metadata(run_dir)
     assert meta["outcome"].startswith("interrupted by SIGINT")
     log = (run_dir / "logs" / "launcher.log").read_text()
@@ -193,7 +180,7 @@ def test_a_run_longer_than_its_timeout_fails_and_says_so(ros_processes, tmp_path
     output, _ = child.communicate(timeout=180)
     assert child.returncode == 1
     assert "timed out after 20 s (--timeout)" in metadata(run_dir)["outcome"], output[-2000:]
-    assert not node_pids(run_dir)
+    assert not run_node_pids(run_dir)
 
 
 def test_resuming_a_folder_whose_metadata_has_no_learner_says_what_to_fix(ros_processes,

@@ -122,6 +122,22 @@ def group_members(pgid: int) -> list[int]:
     return members
 
 
+def run_node_pids(run_dir: Path) -> list[int]:
+    """Live processes started for the run in ``run_dir``: their command line names a parameter
+    file in it (Linux /proc); zombies are dead and not listed, as in group_members. For tests
+    and benchmarks that check no node outlives its launcher, whatever group it ended in."""
+    found = []
+    for cmdline in Path("/proc").glob("[0-9]*/cmdline"):
+        try:
+            text = cmdline.read_bytes().replace(b"\0", b" ").decode(errors="replace")
+            state = (cmdline.parent / "stat").read_text().rsplit(")", 1)[1].split()[0]
+        except (OSError, IndexError):
+            continue
+        if str(run_dir) in text and "--params-file" in text and state not in ("Z", "X"):
+            found.append(int(cmdline.parent.name))
+    return found
+
+
 def group_is_empty(pgid: int) -> bool:
     """True when no live process of the group is left."""
     return not group_members(pgid)
