@@ -83,3 +83,40 @@ def rclpy_context(ros_domain: int) -> Iterator[object]:
 
 
 PYTHON = sys.executable
+
+
+LOG_TAIL_LINES = 40
+LOG_TAIL_TOTAL = 24_000  # characters of node logs added to one failure report
+
+
+def node_log_tails(root: Path) -> str:
+    """The last lines of every log a failed test's processes wrote under `root` (its own
+    logs/ and any run folder's logs/), newest first: on a CI machine the temporary folder is
+    gone, so the failure report must carry the nodes' own words."""
+    logs = sorted(root.rglob("*.log"), key=lambda p: p.stat().st_mtime, reverse=True)
+    parts, total = [], 0
+    for log in logs:
+        try:
+            lines = log.read_text(errors="replace").splitlines()
+        except OSError:
+            continue
+        lines = [line for line in lines if "RTPS_" not in line][-LOG_TAIL_LINES:]
+        text = f"== {log.relative_to(root)} (last {len(lines)} lines)\n" + "\n".join(lines)
+        if total + len(text) > LOG_TAIL_TOTAL:
+            parts.append(f"== ... {len(logs) - len(parts)} more log(s) left out")
+            break
+        parts.append(text)
+        total += len(text)
+    return "\n".join(parts)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo) -> Iterator[None]:
+    """A failed test that started processes shows their logs in its report."""
+    outcome = yield
+    report = outcome.get_result()
+    tmp_path = getattr(item, "funcargs", {}).get("tmp_path")
+    if report.failed and call.when == "call" and isinstance(tmp_path, Path):
+        tails = node_log_tails(tmp_path)
+        if tails:
+            report.sections.append(("node logs", tails))
