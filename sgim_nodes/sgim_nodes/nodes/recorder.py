@@ -43,7 +43,6 @@ from rclpy.qos import HistoryPolicy, QoSProfile
 from rclpy.serialization import deserialize_message
 
 from sgim_msgs.msg import RunStatus
-from sgim_msgs.srv import RecorderReady
 from sgim_nodes.bag.run_folder import QUARANTINE_SUFFIX
 from sgim_nodes.bag.types import RECORDED_TOPICS, STATE_TOPICS, TOPICS
 from sgim_nodes.bag.validation import LIMITS_KEY, Limits, RunValidator, teaching_set_size
@@ -51,6 +50,7 @@ from sgim_nodes.bag.writer import STORAGES, BagWriteError, BagWriter
 from sgim_ros import qos
 from sgim_ros.entry import run_node
 from sgim_ros.params import Param, at_least, declare, non_negative, one_of, positive
+from sgim_ros.ready import serve_ready
 
 FINISH_LIMIT = 30.0  # seconds after the final status at which the recorder stops regardless
 WRITE_FAILED = 3  # exit code: the bag could not be written (the launcher fails the run)
@@ -76,6 +76,11 @@ PARAMS = (
     Param("outcome_size", 2, "numbers per outcome", at_least(1)),
     Param("teaching_set", "", "the teacher's teaching-set file (empty: the packaged one), to "
           "validate teaching-set indices"),
+    # A resumed run's segment continues the run's counts: its first movement is the one after
+    # the resume point, not movement 1 (the launcher gives every node the same two values).
+    Param("resume_from", "", "run folder being resumed: the movement and goal counts of its "
+          "recordings are where this segment's validation starts (empty: a new run)"),
+    Param("resume_segments", 0, "how many of its recordings to read (0: all)", non_negative),
 )
 FINAL_STATES = (RunStatus.STATE_FINISHED, RunStatus.STATE_ABORTED)
 PROGRESS_PERIOD = 10.0  # seconds between progress lines in the log
@@ -104,6 +109,22 @@ def topic_qos(topic: str, *, keep_all: bool = False) -> QoSProfile:
     )
 
 
+def resumed_counts(run_dir: str, segments: int = 0) -> tuple[int, int]:
+    """The movement and goal counts a resumed run carries on from: the last valid ones of
+    its recordings, as the arbiter's resume point counts them (0, 0 for a new run)."""
+    if not run_dir:
+        return 0, 0
+    import warnings
+
+    from sgim_nodes.bag.run_folder import load_run_folder
+
+    with warnings.catch_warnings():  # the earlier segments' own reports said it already
+        warnings.simplefilter("ignore")
+        records = load_run_folder(run_dir, segments, topics=("movements", "goals"))
+    return (max((m.index for m in records.movements), default=0),
+            max((g.index for g in records.goals), default=0))
+
+
 def quarantine_file(output: str | Path) -> Path:
     """Where the recorder of bag `output` writes its quarantine counts (the launcher reads
     it): beside the bag, in the run folder, e.g. runs/x/bag.quarantine.yaml."""
@@ -120,9 +141,11 @@ class RecorderNode(Node):
         self.bag = BagWriter(p["output"], storage=p["storage"],
                              chunk_seconds=p["chunk_seconds"],
                              chunk_messages=p["chunk_messages"])
+        movement_count, goal_count = resumed_counts(p["resume_from"], p["resume_segments"])
         self.validator = RunValidator(Limits(
             action_size=p["action_size"], outcome_size=p["outcome_size"],
-            budget=p["movements"], teaching_set_size=teaching_set_size(p["teaching_set"] or None)))
+            budget=p["movements"], teaching_set_size=teaching_set_size(p["teaching_set"] or None)),
+            movement_count=movement_count, goal_count=goal_count)
         # Readers of this bag validate with the same limits (bag.reader.limits_for).
         self.bag.custom_data[LIMITS_KEY] = self.validator.limits.to_json()
         self._quarantine_path = quarantine_file(self.bag.path)
@@ -148,23 +171,12 @@ class RecorderNode(Node):
             self.bag.add_topic(sub.topic_name, msgtype)
             self.counts[name] = 0
         self.create_timer(min(0.25, p["chunk_seconds"] / 4), self._tick)
-        self.create_service(RecorderReady, "recorder_ready", self._ready)
+        # Matched, not merely discovered: only a matched publisher's messages reach the bag.
+        serve_ready(self, "recorder_ready", self._record_subs)
         self._write_quarantine()
         self.get_logger().info(
             f"recording {len(RECORDED_TOPICS)} topics into {self.bag.file} ({p['storage']}, "
             f"flushed every {p['chunk_seconds']} s or {p['chunk_messages']} messages)")
-
-    def _ready(self, request: RecorderReady.Request, response: RecorderReady.Response):
-        """Matched, not merely discovered: only a matched publisher's messages reach the bag."""
-        missing = []
-        for topic, wanted in zip(request.topics, request.publishers, strict=False):
-            sub = self._record_subs.get(topic)
-            have = -1 if sub is None else sub.get_publisher_count()
-            if have < wanted:
-                missing.append(f"{topic} ({have}/{wanted})")
-        response.ready = not missing
-        response.message = "" if not missing else "not yet matched: " + ", ".join(missing)
-        return response
 
     def _on_message(self, name: str, raw: bytes) -> None:
         if self.finished:
