@@ -33,6 +33,10 @@ PARAMS = (  # all read-only: they are the run's physics, recorded in its metadat
           Bounds(0.0, 0.01, low_open=True)),
     Param("wait_for_recorder", False, "serve execute_action only once the recorder hears the "
           "movements (a node restarted mid-run would otherwise lose its first records)"),
+    Param("movement_listeners", "recorder", "with wait_for_recorder: the nodes (comma-"
+          "separated names) that must hear the movements before execute_action is served; the "
+          "launcher names every node of the run's graph that listens to them",
+          lambda v: all(name.strip() for name in v.split(",")), "comma-separated node names"),
 )
 
 
@@ -44,6 +48,7 @@ class SimBridgeNode(Node):
         self.executed = 0
         self._movements = self.create_publisher(Movement, "movements", qos.RECORDS)
         self._service = None
+        self._listeners = {name.strip() for name in p["movement_listeners"].split(",")}
         if p["wait_for_recorder"]:
             self._gate = self.create_timer(0.1, self._open_when_recorded)
         else:
@@ -58,13 +63,16 @@ class SimBridgeNode(Node):
 
     def _open_when_recorded(self) -> None:
         """Clients wait for the service, so holding it back holds every movement back until
-        the recorder is discovered and every discovered listener is matched."""
+        every expected listener (`movement_listeners`) is discovered and every discovered
+        listener is matched. A simulator restarted mid-run needs this most: its publisher is
+        new to all of them, and a listener that missed a movement could not go on."""
         listeners = self.get_subscriptions_info_by_topic(self._movements.topic_name)
-        if (any(info.node_name == "recorder" for info in listeners)
+        if (self._listeners <= {info.node_name for info in listeners}
                 and self._movements.get_subscription_count() >= len(listeners)):
             self._gate.cancel()
             self._open()
-            self.get_logger().info("the recorder hears the movements: serving execute_action")
+            self.get_logger().info(f"{', '.join(sorted(self._listeners))} hear the movements: "
+                                   "serving execute_action")
 
     def _execute(self, request: ExecuteAction.Request, response: ExecuteAction.Response):
         result = self.world.execute(np.asarray(request.action, dtype=float))

@@ -52,6 +52,7 @@ from sgim_nodes.bag.validation import Limits, LiveGate
 from sgim_nodes.nodes.picture_feed import REACH_PARAMS, reach_tolerance
 from sgim_ros import qos
 from sgim_ros.params import Param, ParameterError, declare, positive
+from sgim_ros.ready import serve_ready
 from sim_bridge.data_files import load_teaching_set
 from teacher.human_commands import (
     OUTCOME_SIZE,
@@ -115,8 +116,9 @@ class HumanInputNode(Node):
                              Limits(self.library.action_size, OUTCOME_SIZE))
         self.gate.movements.resync()
         self._demos = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
-        self.create_subscription(Movement, "movements", self._locked(self._on_movement),
-                                 qos.RECORDS)
+        # The arbiter starts once this has matched (sgim_ros/ready.py).
+        serve_ready(self, "teacher_ready", {"movements": self.create_subscription(
+            Movement, "movements", self._locked(self._on_movement), qos.RECORDS)})
         self.create_subscription(Evaluation, "evaluations", self._locked(self._on_evaluation),
                                  qos.RECORDS)
         self.create_subscription(RunStatus, "run_status", self._locked(self._on_status),

@@ -54,6 +54,7 @@ from sgim_nodes.nodes.ros_glue import (
 )
 from sgim_ros import qos
 from sgim_ros.params import Param, ParameterError, at_least, non_negative, one_of
+from sgim_ros.ready import serve_ready
 from sim_bridge.data_files import load_teaching_set
 from sim_bridge.fishing_world import DEFAULT_NOISE, FishingWorld
 
@@ -108,9 +109,14 @@ class TeacherNode(Node):
             self.answered = set(point.demonstration_turns)
             self.given = point.demonstrations_given
         self._out = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
-        self.create_subscription(Demonstration, "demonstrations_taken", self._on_taken,
-                                 qos.RECORDS)
-        self.create_subscription(RunStatus, "run_status", self._on_status, qos.RECORDS)
+        # The arbiter starts once these have matched (sgim_ros/ready.py): a missed movement
+        # would leave the mirrored memory, and so the teacher's choice, behind the learner's.
+        serve_ready(self, "teacher_ready", {
+            "movements": self.memory.subscription,
+            "demonstrations_taken": self.create_subscription(
+                Demonstration, "demonstrations_taken", self._on_taken, qos.RECORDS),
+            "run_status": self.create_subscription(
+                RunStatus, "run_status", self._on_status, qos.RECORDS)})
         self.get_logger().info(f"{len(ts.actions)} teaching entries, period "
                                f"{p['demonstration_period']}, reached rule {self.rule}")
 

@@ -51,6 +51,7 @@ from sgim_nodes.view.picture import LivePicture
 from sgim_ros import qos
 from sgim_ros.entry import run_node
 from sgim_ros.params import Param, ParameterError, declare, positive
+from sgim_ros.ready import serve_ready
 from sim_bridge import scaling
 from sim_bridge.data_files import load_teaching_set
 from sim_bridge.lake import is_water
@@ -107,8 +108,12 @@ class WebTeacherNode(Node, Api):
         self._waiting: list[tuple[Any, ThreadFuture, float]] = []  # for their service
         self._demos = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
         follow(self, self.app.picture, self.app.lock)
-        self.create_subscription(Movement, "movements", self._on_movement, qos.RECORDS)
-        self.create_subscription(RunStatus, "run_status", self._on_status, qos.RECORDS)
+        # The arbiter starts once these have matched (sgim_ros/ready.py).
+        serve_ready(self, "teacher_ready", {
+            "movements": self.create_subscription(Movement, "movements", self._on_movement,
+                                                  qos.RECORDS),
+            "run_status": self.create_subscription(RunStatus, "run_status", self._on_status,
+                                                   qos.RECORDS)})
         self.create_subscription(PaceState, "pace_state", self._on_pace, qos.LATEST_STATE)
         self._execute = self.create_client(ExecuteAction, "execute_action")
         self._pace = self.create_client(Pace, "pace")

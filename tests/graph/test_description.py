@@ -148,6 +148,26 @@ def test_bad_values_are_refused_by_name(overrides, message):
         parameters(RunOptions("sgim-d", overrides=overrides))
 
 
+@pytest.mark.parametrize(("learner", "teacher", "listeners"), [
+    ("random", "automatic", "recorder,evaluator,markers"),
+    ("saggriac", "automatic", "recorder,evaluator,markers,low_level_explorer"),
+    ("sgim-d", "automatic", "recorder,evaluator,markers,low_level_explorer,imitation,teacher"),
+    ("sgim-d", "human", "recorder,evaluator,markers,low_level_explorer,imitation"),
+    ("sgim-d", "web", "recorder,evaluator,markers,low_level_explorer,imitation,web_teacher"),
+])
+def test_the_simulator_waits_for_every_node_of_the_graph_that_hears_movements(
+        learner, teacher, listeners):
+    """After a restart, a simulator that served before the evaluator matched it would leave
+    the evaluator a movement short for the rest of the run (CI saw that run time out)."""
+    from sgim_nodes.graph.description import RunOptions, parameters
+    from sgim_ros.params import ParameterError
+
+    values = parameters(RunOptions(learner, teacher=teacher))
+    assert values.shared["movement_listeners"] == listeners
+    with pytest.raises(ParameterError, match="'movement_listeners' is set by the launcher"):
+        parameters(RunOptions(learner, overrides={"movement_listeners": "recorder"}))
+
+
 def test_node_sections_are_checked_against_that_node():
     from sgim_nodes.graph.description import RunOptions, parameters
     from sgim_ros.params import ParameterError

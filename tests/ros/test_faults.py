@@ -86,10 +86,15 @@ def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
     from sgim_nodes.bag.reader import read_messages
     from sgim_nodes.bag.resume import load_run_folder, segments
     from sgim_ros import qos
+    from sgim_ros.ready import serve_ready
     from tests.ros.graph_client import GraphClient
 
     client = GraphClient(rclpy_context, "interrupter")
-    status = client.capture(RunStatus, "/run_status", qos.RECORDS)
+    status: list = []
+    # This test stands in for the teacher: it answers the arbiter's teacher_ready as the
+    # teacher node would.
+    serve_ready(client.node, "teacher_ready", {"run_status": client.node.create_subscription(
+        RunStatus, "/run_status", status.append, qos.RECORDS)})
     words = client.node.create_publisher(Demonstration, "/demonstrations", qos.RECORDS)
     common = ["--domain", str(ros_domain), "--quiet", "--timeout", "600"]
     silent_teacher = f"teacher={sys.executable} -c 'import time; time.sleep(3600)'"
@@ -140,3 +145,5 @@ def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
     assert sorted(turns) == [0, 100, 200] and len(set(turns)) == 3  # no turn given twice
     meta = yaml.safe_load((cut / "metadata.yaml").read_text())
     assert meta["outcome"] == "finished" and len(meta["resumed"]) == 1
+    # The resumed recorder validated its segment from the run's count, not from movement 0.
+    assert meta["quarantine"]["total"] == 0, meta["quarantine"]

@@ -134,6 +134,8 @@ OPTION_PARAMETERS = {"learner": "the learner argument", "seed": "--seed",
                      "demonstration_period": "--period", "teacher": "--teacher",
                      "output": "the run folder", "storage": "--storage",
                      "wait_for_recorder": "the launcher (always true in a run)",
+                     "movement_listeners": "the launcher (the graph's nodes that hear the "
+                                           "movements)",
                      "resume_from": "--resume", "resume_segments": "--resume",
                      "wait_for_teacher": "--wait-for-teacher", "host": "--web-host",
                      "port": "--web-port", "token": "--web-token",
@@ -154,6 +156,19 @@ def graph(learner: str, teacher: str = "automatic", markers: bool = True) -> lis
             names.append(teacher_node)
     names.append(ARBITER)
     return [NODES[name] for name in names]
+
+
+# The nodes that subscribe `movements` and cannot go on after missing one; the human prompt is
+# left out: it may leave the run (`quit`), and the run goes on without it.
+MOVEMENT_LISTENERS = ("recorder", "evaluator", "markers", "low_level_explorer", "imitation",
+                      "teacher", "web_teacher")
+
+
+def movement_listeners(options: RunOptions) -> list[str]:
+    """The nodes of this run's graph that the simulator waits for (sim_bridge's
+    `movement_listeners`) before it serves a movement, at its start and after a restart."""
+    return [spec.name for spec in graph(options.learner, options.teacher, options.markers)
+            if spec.name in MOVEMENT_LISTENERS]
 
 
 def learner_defaults() -> dict[str, Any]:
@@ -272,6 +287,7 @@ def parameters(options: RunOptions, node_overrides: Mapping[str, Mapping[str, An
         eval_every=options.eval_every, demonstration_period=options.period,
         teacher=ARBITER_TEACHER[options.teacher] if options.learner in SOCIAL else "none",
         storage=options.storage, wait_for_recorder=True,
+        movement_listeners=",".join(movement_listeners(options)),
         wait_for_teacher=options.wait_for_teacher)
     if options.output:
         values["output"] = options.output

@@ -40,6 +40,7 @@ from sgim_nodes.nodes.ros_glue import (
 )
 from sgim_ros import qos
 from sgim_ros.params import Param, non_negative
+from sgim_ros.ready import serve_ready
 from sim_bridge.data_files import load_benchmark_goals
 from sim_bridge.fishing_world import DEFAULT_NOISE, FishingWorld
 
@@ -83,9 +84,14 @@ class EvaluatorNode(Node):
             self.done |= {0}
             self._point, self._config = point, config
         self._out = self.create_publisher(Evaluation, "evaluations", qos.RECORDS)
-        self.create_subscription(Demonstration, "demonstrations_taken", self._on_demo,
-                                 qos.RECORDS)
-        self.create_subscription(RunStatus, "run_status", self._on_status, qos.RECORDS)
+        # The arbiter starts once these have matched (a missed movement would stall the
+        # evaluations: sgim_ros/ready.py).
+        serve_ready(self, "evaluator_ready", {
+            "movements": self.memory.subscription,
+            "demonstrations_taken": self.create_subscription(
+                Demonstration, "demonstrations_taken", self._on_demo, qos.RECORDS),
+            "run_status": self.create_subscription(
+                RunStatus, "run_status", self._on_status, qos.RECORDS)})
         self.get_logger().info(f"{len(goals)} benchmark goals, every {self.every} movements")
 
     def _on_demo(self, msg: Demonstration) -> None:

@@ -36,6 +36,7 @@ from sgim_nodes.nodes.ros_glue import (
 )
 from sgim_nodes.nodes.sim_client import SIM_CLIENT_PARAMS, SimClient
 from sgim_ros import qos
+from sgim_ros.ready import serve_ready
 
 PARAMS = learner_node_params(*SIM_CLIENT_PARAMS)
 
@@ -53,7 +54,8 @@ class ImitationNode(AsyncNode):
         if values["resume_from"]:
             self.gate.movements.count = resume_point(
                 values["resume_from"], self.config, values["resume_segments"]).count
-        self.create_subscription(Movement, "movements", self.gate.admit_movement, qos.RECORDS)
+        serve_ready(self, "imitation_ready", {"movements": self.create_subscription(
+            Movement, "movements", self.gate.admit_movement, qos.RECORDS)})
         self.sim = SimClient(self, values)
         self.jobs = JobServer(self, Imitate, "imitate", self._run)
 

@@ -41,6 +41,7 @@ from sgim_nodes.nodes.ros_glue import (
 )
 from sgim_nodes.nodes.sim_client import SIM_CLIENT_PARAMS, SimClient
 from sgim_ros import qos
+from sgim_ros.ready import serve_ready
 
 PARAMS = learner_node_params(*SIM_CLIENT_PARAMS)
 
@@ -58,6 +59,8 @@ class LowLevelExplorer(AsyncNode):
         if values["resume_from"]:
             self.memory.resume(resume_point(values["resume_from"], self.config,
                                  values["resume_segments"]))
+        # A missed movement would stall every reach job that waits for it (sgim_ros/ready.py).
+        serve_ready(self, "explorer_ready", {"movements": self.memory.subscription})
         self.sim = SimClient(self, values)
         self._competences = self.create_publisher(Competence, "competences", qos.RECORDS)
         self.create_service(RegisterDemonstration, "register_demonstration", self._register)

@@ -44,7 +44,8 @@ class MovementMemory:
         self._latest_row: int | None = None  # memory row of movement `count`, if stored
         self._deferred: list[tuple[int, np.ndarray, np.ndarray]] = []
         self._waiters: list[tuple[int, Future]] = []
-        node.create_subscription(Movement, "movements", self._on_movement, qos.RECORDS)
+        self.subscription = node.create_subscription(Movement, "movements", self._on_movement,
+                                                     qos.RECORDS)
 
     def _on_movement(self, msg: Movement) -> None:
         verdict = self.gate.admit_movement(msg)

@@ -80,7 +80,8 @@ PARAMS = learner_node_params(
     Param("wait_for_evaluation", True, "finish only after the final evaluation"),
     Param("wait_for_recorder", True, "start only once a recorder listens"),
     Param("startup_timeout", 60.0, "seconds to wait for the other nodes (their servers, "
-          "publishers and the recorder's readiness) before the start", positive),
+          "publishers and the listeners' *_ready services, sgim_ros/ready.py) before the start",
+          positive),
     Param("teacher_timeout", 60.0, "seconds to wait for the teacher at a boundary", positive,
           read_only=False),
     Param("call_timeout", 600.0, "seconds to wait for the answer of choose_goal or "
@@ -266,31 +267,49 @@ class SocialInteraction(AsyncNode):
                     raise RunAborted(f"nobody publishes '{topic}' after {timeout:g} s: is its "
                                      "node (evaluator or teacher) up?")
                 await first_of(self, Future(), 0.1)
-        # The recorder must hear the run from its first record: it must have matched every
-        # publisher of every record topic that we see (a late DDS match loses records silently).
-        if self.p["wait_for_recorder"]:
-            await self._wait_for_recorder(deadline, timeout)
+        # Every node that listens to the run's records must hear it from its first record:
+        # each must have matched every publisher that we see (a late DDS match loses records
+        # silently; sgim_ros/ready.py).
+        for service, who in self._listeners():
+            await self._wait_until_listening(service, who, deadline, timeout)
         await first_of(self, Future(), self.p["settle_time"])
 
-    async def _wait_for_recorder(self, deadline: float, timeout: float) -> None:
-        ready = self.create_client(RecorderReady, "recorder_ready")
-        why = ("no recorder_ready service: start the recorder node, or set wait_for_recorder "
-               "to false")
+    def _listeners(self) -> list[tuple[str, str]]:
+        """The ready services to ask before the start, with who serves each."""
+        listeners = []
+        if self.p["wait_for_recorder"]:
+            listeners.append(("recorder_ready", "the recorder node (or set wait_for_recorder "
+                                                "to false)"))
+        if self.p["wait_for_evaluation"]:
+            listeners.append(("evaluator_ready", "the evaluator node"))
+        if self.learner in GOAL_BABBLERS:
+            listeners.append(("explorer_ready", "the low_level_explorer node"))
+        if self.social:
+            listeners.append(("imitation_ready", "the imitation node"))
+        if self.sync_period:
+            listeners.append(("teacher_ready", "the teacher node"))
+        return listeners
+
+    async def _wait_until_listening(self, service: str, who: str, deadline: float,
+                                    timeout: float) -> None:
+        ready = self.create_client(RecorderReady, service)
+        name = service.removesuffix("_ready")
+        why = f"no {service} service: is {who} up?"
         while time.monotonic() < deadline:
             if ready.service_is_ready():
                 request = RecorderReady.Request(topics=list(RECORD_TOPICS))
                 request.publishers = [self.count_publishers(t) for t in RECORD_TOPICS]
                 # Each call is bounded: a request lost in discovery is asked again.
-                reply = await self._call(ready, request, "recorder_ready",
+                reply = await self._call(ready, request, service,
                                          min(5.0, max(0.1, deadline - time.monotonic())),
                                          fatal=False)
                 if reply is not None and reply.ready:
                     self.destroy_client(ready)
                     return
-                why = ("the recorder did not answer recorder_ready" if reply is None
-                       else f"the recorder is not ready: {reply.message}")
+                why = (f"the {name} did not answer {service}" if reply is None
+                       else f"the {name} is not ready: {reply.message}")
             await first_of(self, Future(), 0.1)
-        raise RunAborted(f"after {timeout:g} s waiting for recorder_ready, {why}")
+        raise RunAborted(f"after {timeout:g} s waiting for {service}, {why}")
 
     async def _call(self, client, request, name: str, timeout: float | None = None,
                     fatal: bool = True):

@@ -1,0 +1,50 @@
+"""The "ready" check of a node that must hear a run from its first record.
+
+DDS matches a publisher and a subscription some time after both exist, and a message
+published before the match is lost to that subscriber without a trace. Under load the match
+can take seconds. So the arbiter, before its first movement, asks every node that listens to
+the run's records (the recorder, the evaluator, the teacher, the explorer, the imitation
+node) whether it has matched at least the publishers that the arbiter itself sees on each
+topic (sgim_msgs/srv/RecorderReady); it starts only when every one says yes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from rclpy.node import Node
+
+from sgim_msgs.srv import RecorderReady
+
+
+def unmatched(subscriptions: Mapping[str, Any], topics: list[str],
+              publishers: list[int]) -> list[str]:
+    """The topics (as 'name (have/wanted)') whose subscription has matched fewer publishers
+    than `publishers` says; a topic this node does not listen to is not its concern."""
+    missing = []
+    for topic, wanted in zip(topics, publishers, strict=False):
+        sub = subscriptions.get(topic)
+        if sub is None:
+            continue
+        have = sub.get_publisher_count()
+        if have < wanted:
+            missing.append(f"{topic} ({have}/{wanted})")
+    return missing
+
+
+def serve_ready(node: Node, service: str, subscriptions: Mapping[str, Any]) -> Any:
+    """Serve `service` (RecorderReady) for `subscriptions`, keyed by the topic name as
+    subscribed (relative, e.g. 'movements' or 'markers/landings'): ready when
+    each one the caller names has matched at least as many publishers as the caller sees.
+    The mapping is read at each call, so subscriptions added later count too."""
+    if not subscriptions:
+        raise ValueError(f"{service}: a ready service needs at least one subscription")
+
+    def answer(request: RecorderReady.Request, response: RecorderReady.Response):
+        missing = unmatched(subscriptions, list(request.topics), list(request.publishers))
+        response.ready = not missing
+        response.message = "" if not missing else "not yet matched: " + ", ".join(missing)
+        return response
+
+    return node.create_service(RecorderReady, service, answer)
