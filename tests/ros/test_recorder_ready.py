@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import subprocess
+
 import pytest
 
 from tests.conftest import REPO
@@ -101,3 +103,52 @@ def test_the_simulator_serves_only_once_every_named_listener_hears_it(ros_proces
         recorder.close()
         if evaluator is not None:
             evaluator.close()
+
+
+def test_the_arbiter_makes_no_movement_before_every_listener_is_ready(ros_processes,
+                                                                      rclpy_context):
+    """A stand-in evaluator that says "not yet" for its first 5 s: the arbiter's first
+    movement comes after its first "ready", whatever the discovery timing."""
+    import time
+
+    from sgim_msgs.msg import Evaluation, Movement
+    from sgim_msgs.srv import RecorderReady
+    from sgim_ros import qos
+
+    ros_processes.start("sim_bridge", [str(REPO / "ros_ws" / "ros2run.sh"), "sim_bridge",
+                                       "sim_bridge"])
+    client = GraphClient(rclpy_context, "evaluator")
+    node = client.node
+    seen: list[tuple[int, float]] = []
+    answers: list[tuple[bool, float]] = []
+    opens_at: list[float] = []
+    evaluations = node.create_publisher(Evaluation, "/evaluations", qos.RECORDS)
+    node.create_subscription(Movement, "/movements",
+                             lambda m: seen.append((m.index, time.monotonic())), qos.RECORDS)
+
+    def answer(request, response):
+        opens_at or opens_at.append(time.monotonic() + 5.0)
+        response.ready = time.monotonic() >= opens_at[0]
+        response.message = "" if response.ready else "not yet matched: movements (0/1)"
+        answers.append((response.ready, time.monotonic()))
+        return response
+
+    node.create_service(RecorderReady, "/evaluator_ready", answer)
+    arbiter = ros_processes.start("arbiter", [
+        str(REPO / "ros_ws" / "ros2run.sh"), "sgim_nodes", "social_interaction", "--ros-args",
+        "-p", "learner:=random", "-p", "movements:=5", "-p", "wait_for_recorder:=false",
+        "-p", "settle_time:=0.0", "-p", "startup_timeout:=60.0"],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        assert client.spin_until(lambda: len(seen) >= 5 or arbiter.poll() is not None,
+                                 timeout=120), "no movements"
+        evaluations.publish(Evaluation(movement_index=5, mean_distance=0.1, outcome_size=2,
+                                       goals=[0.0, 0.0], reached=[0.1, 0.0], distances=[0.1]))
+        output, _ = arbiter.communicate(timeout=60)
+    finally:
+        client.close()
+    assert arbiter.returncode == 0, output
+    first_ready = min(t for ready, t in answers if ready)
+    assert any(not ready for ready, _ in answers), "the arbiter never met a 'not yet'"
+    assert [i for i, _ in seen] == [1, 2, 3, 4, 5]
+    assert seen[0][1] >= first_ready, (seen[0][1] - first_ready)
