@@ -109,10 +109,27 @@ def run_node(factory: Callable[[], Node], args: list[str] | None = None,
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
+        tear_down(factory.__name__, executor, node)
     return int(getattr(node, "exit_code", 0))
+
+
+def tear_down(name: str, executor: SingleThreadedExecutor, node: Node) -> None:
+    """End the node whatever signals still come: its own end (the recorder closes its bag in
+    destroy_node) must not be cut by a second Ctrl-C or by a KeyboardInterrupt that rclpy's
+    signal handler let through late, and rclpy's own teardown racing the shutdown that the
+    signal started is no failure of the node: it is said in one line, and the node's exit code
+    stands."""
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        with contextlib.suppress(ValueError, OSError):  # ValueError: not the main thread
+            signal.signal(sig, signal.SIG_IGN)
+    for what, step in (("executor shutdown", executor.shutdown),
+                       ("node destruction", node.destroy_node),
+                       ("rclpy shutdown", rclpy.try_shutdown)):
+        try:
+            step()
+        except Exception as error:
+            print(f"[{name}] {what} after the end: {type(error).__name__}: {error}",
+                  file=sys.stderr, flush=True)
 
 
 def follow_launcher(grace: float = LAUNCHER_GRACE) -> bool:

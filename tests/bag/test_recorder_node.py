@@ -3,6 +3,7 @@ leaves a bag readable up to near the kill, a final RunStatus ends it by itself."
 
 from __future__ import annotations
 
+import contextlib
 import os
 import random
 import signal
@@ -154,6 +155,9 @@ def test_sigint_and_sigterm_close_the_open_part(ros_processes, client, tmp_path)
             pubs["movements"].publish(h.movement(i, rng))
         time.sleep(1.0)  # delivered, but no part finished: only the signal can save them
         os.killpg(recorder.pid, sig)
+        time.sleep(0.05)  # an impatient user presses it again: the closing must not be cut
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(recorder.pid, sig)
         assert recorder.wait(timeout=20) == 0
         assert [m.index for m in load_run(bag).movements] == list(range(1, 301)), sig.name
         for pub in pubs.values():
