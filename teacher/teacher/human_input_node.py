@@ -11,7 +11,8 @@ person types (the teacher's turn, a pause, a refused demonstration, progress eve
 end of the run) is printed above the prompt, which is redrawn with what was being typed. When
 the run is over the prompt says so and leaves by itself: the reading thread is woken with
 SIGINT (rclpy's own signal handlers are not installed, so Ctrl-C is a plain
-KeyboardInterrupt). A pipe works the same way as a terminal (tests), without readline.
+KeyboardInterrupt). A pipe works the same way as a terminal (tests), without readline: its
+lines come through a queue (PipeLines), so that no SIGINT is lost to a blocked read().
 
 Interfaces:
   topic    movements       (sgim_msgs/msg/Movement, RECORDS): reached outcomes, movement count
@@ -30,6 +31,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import queue
 import signal
 import sys
 import threading
@@ -386,7 +388,41 @@ def _save_history(readline) -> None:
         readline.write_history_file(HISTORY)
 
 
-def run(node: HumanInputNode) -> str:
+class PipeLines:
+    """The lines of a stdin that is not a terminal, read by a daemon thread.
+
+    A SIGINT that lands after `input()` wrote its prompt but before its read() blocks is
+    handled (Python's flag is set) without interrupting that read, which then waits for the
+    next line for ever: Ctrl-C, and the spinner's wake-up at the run's end, were lost (seen
+    under load). Here the main thread waits on a queue in short steps, between which Python
+    raises a pending KeyboardInterrupt. A terminal keeps input() and readline's editing."""
+
+    def __init__(self, stream: TextIO, out: TextIO) -> None:
+        self.out = out
+        self.lines: queue.Queue[str | None] = queue.Queue()
+        threading.Thread(target=self._pump, args=(stream,), name="human-input-stdin",
+                         daemon=True).start()
+
+    def _pump(self, stream: TextIO) -> None:
+        for line in stream:
+            self.lines.put(line.rstrip("\n"))
+        self.lines.put(None)  # end of input
+
+    def input(self, text: str) -> str:
+        self.out.write(text)
+        self.out.flush()
+        while True:
+            try:
+                line = self.lines.get(timeout=0.1)
+            except queue.Empty:
+                continue
+            if line is None:
+                self.lines.put(None)  # every later read sees the end too
+                raise EOFError
+            return line
+
+
+def run(node: HumanInputNode, read_line=input) -> str:
     """Read and obey lines until quit, end of input or the run's end; returns why it ended."""
     spinner = Spinner(node)
     spinner.start()
@@ -396,7 +432,7 @@ def run(node: HumanInputNode) -> str:
                 text = node.prompt_text()
                 node.at_prompt = True
             try:
-                line = input(text)
+                line = read_line(text)
             except EOFError:
                 node.at_prompt = False
                 node.end_of_input()
@@ -435,7 +471,7 @@ def main(args: list[str] | None = None) -> int:
     if interactive:
         setup_readline()
     try:
-        run(node)
+        run(node, input if interactive else PipeLines(sys.stdin, sys.stdout).input)
     except KeyboardInterrupt:
         if not node.finished:  # else the spinner's wake-up came late: all was said
             node.say("\ninterrupted: bye")

@@ -82,19 +82,22 @@ def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
     """Interrupted where it cannot have finished, whatever the machine's load: the teacher
     never answers turn 100 (its node is replaced by a sleeper; this test gives turn 0's
     word), so the arbiter waits at movement 100, and Ctrl-C comes once the bag holds it."""
-    from sgim_msgs.msg import Demonstration, RunStatus
+    from sgim_msgs.msg import Demonstration, Movement, RunStatus
     from sgim_nodes.bag.reader import read_messages
     from sgim_nodes.bag.resume import load_run_folder, segments
     from sgim_ros import qos
     from sgim_ros.ready import serve_ready
     from tests.ros.graph_client import GraphClient
 
-    client = GraphClient(rclpy_context, "interrupter")
+    # This test stands in for the teacher: named like it, it hears the movements (the
+    # simulator waits for every listener of the graph) and answers teacher_ready.
+    client = GraphClient(rclpy_context, "teacher")
     status: list = []
-    # This test stands in for the teacher: it answers the arbiter's teacher_ready as the
-    # teacher node would.
-    serve_ready(client.node, "teacher_ready", {"run_status": client.node.create_subscription(
-        RunStatus, "/run_status", status.append, qos.RECORDS)})
+    serve_ready(client.node, "teacher_ready", {
+        "run_status": client.node.create_subscription(RunStatus, "/run_status", status.append,
+                                                      qos.RECORDS),
+        "movements": client.node.create_subscription(Movement, "/movements", lambda _: None,
+                                                     qos.RECORDS)})
     words = client.node.create_publisher(Demonstration, "/demonstrations", qos.RECORDS)
     common = ["--domain", str(ros_domain), "--quiet", "--timeout", "600"]
     silent_teacher = f"teacher={sys.executable} -c 'import time; time.sleep(3600)'"

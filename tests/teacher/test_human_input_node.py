@@ -334,3 +334,34 @@ def test_a_terminal_gets_line_editing_history_and_news_above_the_prompt(
         os.close(master)
     lines = history.read_text().splitlines()  # kept for the next session
     assert lines[0] == "list" and lines[-3:] == ["status", "list", "quit"]
+
+
+PIPE_INTERRUPT = """
+import _thread, os, sys, threading
+{reader}
+threading.Timer(0.5, _thread.interrupt_main).start()
+try:
+    read("human> ")
+except KeyboardInterrupt:
+    print("interrupted")
+"""
+
+
+@pytest.mark.parametrize(("reader", "interrupted"), [
+    ("from teacher.human_input_node import PipeLines\n"
+     "read = PipeLines(os.fdopen(os.pipe()[0]), sys.stdout).input", True),
+    # The control: input() blocked in read() never sees an interrupt that is flagged but does
+    # not interrupt the read (what a SIGINT landing just before the read did).
+    ("sys.stdin = os.fdopen(os.pipe()[0])\nread = input", False),
+])
+def test_an_interrupt_that_lands_before_the_read_still_ends_the_prompt(reader, interrupted):
+    """_thread.interrupt_main flags SIGINT without interrupting any system call: exactly the
+    state a SIGINT leaves when it lands between the prompt's write and the read."""
+    child = subprocess.Popen([PYTHON, "-c", PIPE_INTERRUPT.format(reader=reader)],
+                             stdout=subprocess.PIPE, text=True)
+    try:
+        output, _ = child.communicate(timeout=20 if interrupted else 3)
+    except subprocess.TimeoutExpired:
+        child.kill()
+        output, _ = child.communicate()
+    assert ("interrupted" in output) == interrupted, output
