@@ -10,7 +10,8 @@ from synthetic_study import FINALS
 
 from sgim_nodes.analysis.cli import main
 
-FILES = ("error_curves.png", "landings.png", "region_tree.png", "results.md", "results.json")
+FILES = ("error_curves.png", "landings.png", "landings_frames.png", "region_tree.png",
+         "results.md", "results.json")
 
 
 def _png(path: Path) -> bool:
@@ -30,12 +31,16 @@ def test_cli_writes_every_file(study: Path, tmp_path: Path, capsys: pytest.Captu
     assert results["final_errors"]["sgim-d"]["mean"] == pytest.approx(0.25)
     assert results["tests"][0]["welch_p"] is not None
     assert results["isolated_coverage"]["sgim-d"]["runs_reached"] == 1
+    [region_test] = results["isolated_coverage_tests"]
+    assert (region_test["reached_a"], region_test["reached_b"]) == (1, 0)
+    assert region_test["fisher_p"] == pytest.approx(1.0)  # 1/3 against 0/3: no evidence
     assert results["runs"]["sgim-d"]["total_duration_s"] == pytest.approx(33.0)
     assert results["curves"]["random"]["movements"] == [0, 10, 20]
     md = (out / "results.md").read_text()
     for heading in ("## Runs", "## Final error", "## Pairwise tests", "## Isolated region"):
         assert heading in md
     assert "| sgim-d | 3 | 20 | 0.250 |" in md
+    assert "| sgim-d | random | 1/3, 0/3 | 1 |" in md  # the isolated region's tests
 
 
 def test_default_output_folder_and_times(study: Path) -> None:

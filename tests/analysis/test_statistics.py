@@ -5,12 +5,17 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 from scipy import stats
 from synthetic_study import AT_0, AT_10, FINALS
 
 from sgim_nodes.analysis.statistics import (
+    Coverage,
+    RunCoverage,
     compare,
+    coverage_tests,
+    demonstration_times,
     error_curves,
     final_errors,
     isolated_coverage,
@@ -91,3 +96,69 @@ def test_run_summaries_from_metadata(study: Path) -> None:
     assert (summary.runs, summary.finished, summary.seeds) == (3, 3, [0, 1, 2])
     assert summary.total_duration_s == pytest.approx(33.0)
     assert summary.mean_duration_s == pytest.approx(11.0)
+
+
+def _coverage(learner: str, own: list[int], outcomes: int = 1000) -> Coverage:
+    return Coverage(learner, [RunCoverage(seed, outcomes, n + 1 if n else 0, n,
+                                          100 if n else None) for seed, n in enumerate(own)])
+
+
+def test_isolated_region_tests_match_scipy() -> None:
+    coverage = {"sgim-d": _coverage("sgim-d", [5, 9, 0, 12, 7, 3]),
+                "saggriac": _coverage("saggriac", [0, 0, 1, 0, 0, 0]),
+                "random": _coverage("random", [0, 0, 0, 0, 0, 0])}
+    tests = {(t.a, t.b): t for t in coverage_tests(coverage)}
+    assert set(tests) == {("sgim-d", "saggriac"), ("sgim-d", "random"), ("saggriac", "random")}
+    t = tests["sgim-d", "saggriac"]
+    assert (t.reached_a, t.runs_a, t.reached_b, t.runs_b) == (5, 6, 1, 6)
+    assert t.fisher_p == pytest.approx(stats.fisher_exact([[5, 1], [1, 5]]).pvalue)
+    mwu = stats.mannwhitneyu([n / 1000 for n in (5, 9, 0, 12, 7, 3)],
+                             [n / 1000 for n in (0, 0, 1, 0, 0, 0)], alternative="two-sided")
+    assert t.own_share_p == pytest.approx(mwu.pvalue) and t.own_share_u == mwu.statistic
+    assert t.significant  # MW p about 0.02
+    nothing = tests["saggriac", "random"]
+    assert nothing.fisher_p == pytest.approx(1.0) and not nothing.significant
+    # Nobody reached it in either: nothing to rank, no difference.
+    none = coverage_tests({"a": _coverage("a", [0, 0]), "b": _coverage("b", [0, 0, 0])})[0]
+    assert none.own_share_p == 1.0 and not none.significant
+    one = coverage_tests({"a": _coverage("a", [4]), "b": _coverage("b", [0, 0])})[0]
+    assert not one.applicable and one.fisher_p is None and not one.significant
+
+
+class _Runs:
+    def __init__(self, runs: dict[str, list]) -> None:
+        self.learners, self._runs = list(runs), runs
+
+    def runs_of(self, learner: str) -> list:
+        return self._runs[learner]
+
+
+class _Run:
+    def __init__(self, given: dict[int, bool]) -> None:
+        self.demo_index = np.array(list(given), dtype=np.int64)
+        self.demo_outcome = np.array([[0.1, 0.2] if shown else [np.nan, np.nan]
+                                      for shown in given.values()]).reshape(-1, 2)
+
+
+def test_demonstration_times_count_only_shown_demonstrations_per_run() -> None:
+    # Turn 150 of seed 1 was the teacher's "nothing to show"; random got none at all.
+    study = _Runs({"sgim-d": [_Run({0: True, 150: True}), _Run({0: True, 150: False,
+                                                                  300: True})],
+                   "random": [_Run({}), _Run({})]})
+    times = demonstration_times(study)
+    assert list(times) == ["sgim-d"]
+    assert times["sgim-d"].movements.tolist() == [0, 150, 300]
+    assert times["sgim-d"].runs_with_one.tolist() == [2, 1, 1]
+    assert times["sgim-d"].runs == 2
+
+
+def test_separate_time_frames_hold_each_landing_once(study: Path) -> None:
+    from sgim_nodes.analysis.figures import _landings, frame_bounds
+
+    assert frame_bounds([5, 10, 20], cumulative=True) == [(0, 5), (0, 10), (0, 20)]
+    assert frame_bounds([5, 10, 20], cumulative=False) == [(0, 5), (5, 10), (10, 20)]
+    runs = load_study(study).runs_of("sgim-d")
+    separate = [len(_landings(runs, a, b)) for a, b in frame_bounds([5, 10, 20], False)]
+    # 3 runs x movements 1..20, movement 7 failed in each: 3 x 19 landings in all.
+    assert separate == [15, 12, 30] and sum(separate) == 57
+    assert len(_landings(runs, 0, 20)) == 57

@@ -1,9 +1,11 @@
 """The study's figures as PNG files (matplotlib Agg: no display needed).
 
   error_curves.png  mean distance to the benchmark goals vs movements, one line per learner,
-                    its 95 % band over seeds (the paper's main figure)
+                    its 95 % band over seeds, the demonstrations as ticks (the paper's main
+                    figure)
   landings.png      where the hook landed, rows learners, columns cumulated time frames, pooled
                     over seeds; the isolated region outlined (the paper's exploration figure)
+  landings_frames.png  the same for each separate time frame (what was explored when)
   region_tree.png   the leaves of the interest tree at chosen times, coloured by interest, for
                     one seed of each learner that builds a tree (sgim-d, saggriac)
 
@@ -26,7 +28,7 @@ from matplotlib.collections import PatchCollection
 from matplotlib.colors import LogNorm, Normalize
 from matplotlib.patches import Circle, Rectangle
 
-from sgim_nodes.analysis.statistics import Curve
+from sgim_nodes.analysis.statistics import Curve, DemonstrationTimes
 from sgim_nodes.analysis.study import STATUS_OK, RunData, Study
 from sim_bridge.lake import ISOLATED_REGION, draw_shoreline
 
@@ -54,9 +56,13 @@ def _outcome_axes(ax: plt.Axes) -> None:
     ax.tick_params(labelsize=7)
 
 
-def plot_error_curves(curves: dict[str, Curve], path: Path, floor: float | None = None) -> Path:
-    """``floor``: the benchmark's floor (``analysis.floor``), drawn as a dashed line."""
+def plot_error_curves(curves: dict[str, Curve], path: Path, floor: float | None = None,
+                      demonstrations: dict[str, DemonstrationTimes] | None = None) -> Path:
+    """``floor``: the benchmark's floor (``analysis.floor``), drawn as a dashed line.
+    ``demonstrations``: when each learner's runs were shown one, ticks along the bottom in its
+    colour, darker where more of its runs got one at that movement."""
     fig, ax = plt.subplots(figsize=(8, 5))
+    _demonstration_ticks(ax, curves, demonstrations or {})
     if floor is not None:
         ax.axhline(floor, color="black", linestyle="--", linewidth=1,
                    label=f"floor: map lookup cast with noise ({floor:.3f})")
@@ -81,21 +87,48 @@ def plot_error_curves(curves: dict[str, Curve], path: Path, floor: float | None 
     return path
 
 
-def _landings(runs: list[RunData], end: int) -> np.ndarray:
-    parts = [r.outcome[(r.movement_index <= end) & (r.status == STATUS_OK)] for r in runs]
+def _demonstration_ticks(ax: plt.Axes, curves: dict[str, Curve],
+                         demonstrations: dict[str, DemonstrationTimes]) -> None:
+    rows = [learner for learner in curves if learner in demonstrations]
+    bottom = ax.get_xaxis_transform()  # x in movements, y in axes fractions
+    for row, learner in enumerate(rows):
+        times = demonstrations[learner]
+        col = colour(learner, list(curves).index(learner))
+        y = 0.01 + 0.035 * row
+        rgb = matplotlib.colors.to_rgb(col)
+        ax.vlines(times.movements, y, y + 0.03, transform=bottom, linewidth=0.8,
+                  colors=[(*rgb, 0.25 + 0.75 * k / times.runs) for k in times.runs_with_one])
+        ax.plot([], [], "|", color=col, markersize=8,
+                label=f"{learner}: a demonstration (darker: in more runs)")
+
+
+def frame_bounds(frames: Sequence[int], cumulative: bool) -> list[tuple[int, int]]:
+    """The movement ranges (start, end], one per panel: 0..end each (cumulated), or between
+    consecutive frame ends (the paper's separate time frames)."""
+    ends = list(frames)
+    starts = [0] * len(ends) if cumulative else [0, *ends[:-1]]
+    return list(zip(starts, ends, strict=True))
+
+
+def _landings(runs: list[RunData], start: int, end: int) -> np.ndarray:
+    parts = [r.outcome[(r.movement_index > start) & (r.movement_index <= end)
+                       & (r.status == STATUS_OK)] for r in runs]
     points = np.concatenate(parts) if parts else np.zeros((0, 2))
     return points[np.isfinite(points).all(axis=1)]
 
 
-def plot_landings(study: Study, frames: Sequence[int], path: Path) -> Path:
-    """Rows learners, columns movements 1..frame; each panel is the share of the frame's
-    landings per bin (so frames of different lengths compare), pooled over the seeds."""
+def plot_landings(study: Study, frames: Sequence[int], path: Path,
+                  cumulative: bool = True) -> Path:
+    """Rows learners, columns movements 1..frame (``cumulative``) or each separate frame
+    (previous frame's end + 1 .. frame); each panel is the share of its landings per bin (so
+    frames of different lengths compare), pooled over the seeds."""
     learners = study.learners
     edges = np.linspace(-1, 1, BINS + 1)
+    bounds = frame_bounds(frames, cumulative)
     shares: dict[tuple[str, int], tuple[np.ndarray, int]] = {}
     for learner in learners:
-        for end in frames:
-            points = _landings(study.runs_of(learner), end)
+        for start, end in bounds:
+            points = _landings(study.runs_of(learner), start, end)
             counts, _, _ = np.histogram2d(points[:, 0], points[:, 1], bins=[edges, edges])
             shares[learner, end] = (counts / max(len(points), 1), len(points))
     positive = [s[s > 0] for s, _ in shares.values() if (s > 0).any()]
@@ -108,7 +141,7 @@ def plot_landings(study: Study, frames: Sequence[int], path: Path) -> Path:
     mesh = None
     for i, learner in enumerate(learners):
         n_runs = len(study.runs_of(learner))
-        for j, end in enumerate(frames):
+        for j, (start, end) in enumerate(bounds):
             ax = axes[i][j]
             share, count = shares[learner, end]
             masked = np.ma.masked_where(share.T <= 0, share.T)
@@ -118,12 +151,13 @@ def plot_landings(study: Study, frames: Sequence[int], path: Path) -> Path:
             _outcome_axes(ax)
             ax.text(0.02, 0.02, f"{count} landings", transform=ax.transAxes, fontsize=7)
             if i == 0:
-                ax.set_title(f"movements 1-{end}", fontsize=9)
+                ax.set_title(f"movements {start + 1}-{end}", fontsize=9)
             if j == 0:
                 ax.set_ylabel(f"{learner}\n({n_runs} run{'s' if n_runs > 1 else ''})",
                               fontsize=9)
     fig.suptitle("Where the hook landed (share of the frame's landings per bin, pooled over "
-                 "seeds; dashed: isolated region)", fontsize=10)
+                 f"seeds; {'cumulated' if cumulative else 'separate'} time frames; dashed: "
+                 "isolated region)", fontsize=10)
     fig.tight_layout(rect=(0, 0, 0.88, 0.96))
     if mesh is not None:
         fig.colorbar(mesh, cax=fig.add_axes((0.9, 0.15, 0.02, 0.7)), label="share of landings")

@@ -203,6 +203,83 @@ def isolated_coverage(study: Study) -> dict[str, Coverage]:
             for learner in study.learners}
 
 
+@dataclass(frozen=True)
+class CoverageTest:
+    """Do two learners meet the isolated region differently? Two views of the same question:
+    how many runs reach it at all (Fisher's exact test on runs reaching / not reaching), and
+    how much of a run's own exploration lands there (Mann-Whitney U on the per-run share of
+    landings that are the learner's own, imitations and demonstrated actions left out)."""
+
+    a: str
+    b: str
+    reached_a: int
+    runs_a: int
+    reached_b: int
+    runs_b: int
+    fisher_p: float | None
+    own_share_u: float | None
+    own_share_p: float | None
+
+    @property
+    def applicable(self) -> bool:
+        return min(self.runs_a, self.runs_b) >= 2
+
+    @property
+    def significant(self) -> bool:
+        return self.applicable and any(p is not None and p < ALPHA
+                                       for p in (self.fisher_p, self.own_share_p))
+
+
+def own_share(run: RunCoverage) -> float:
+    return run.own_in_region / run.outcomes if run.outcomes else 0.0
+
+
+def coverage_tests(coverage: dict[str, Coverage]) -> list[CoverageTest]:
+    """Every pair of learners (two-sided tests)."""
+    out = []
+    for a, b in combinations(list(coverage), 2):
+        ca, cb = coverage[a], coverage[b]
+        na, nb = len(ca.runs), len(cb.runs)
+        fisher_p = u = mw_p = None
+        if min(na, nb) >= 2:
+            table = [[ca.runs_reached, na - ca.runs_reached],
+                     [cb.runs_reached, nb - cb.runs_reached]]
+            fisher_p = float(stats.fisher_exact(table).pvalue)
+            sa, sb = [own_share(r) for r in ca.runs], [own_share(r) for r in cb.runs]
+            if len(set(sa) | set(sb)) > 1:  # all equal (say, all zero): nothing to rank
+                mwu = stats.mannwhitneyu(sa, sb, alternative="two-sided")
+                u, mw_p = float(mwu.statistic), float(mwu.pvalue)
+            else:
+                u, mw_p = float(na * nb / 2), 1.0
+        out.append(CoverageTest(a, b, ca.runs_reached, na, cb.runs_reached, nb, fisher_p,
+                                u, mw_p))
+    return out
+
+
+@dataclass(frozen=True)
+class DemonstrationTimes:
+    """When a learner's runs were given demonstrations (non-empty ones): each movement count
+    at which any run got one, and in how many of the ``runs`` runs."""
+
+    movements: np.ndarray
+    runs_with_one: np.ndarray
+    runs: int
+
+
+def demonstration_times(study: Study) -> dict[str, DemonstrationTimes]:
+    """Learners whose runs got at least one demonstration."""
+    out = {}
+    for learner in study.learners:
+        runs = study.runs_of(learner)
+        given = [np.unique(r.demo_index[np.isfinite(r.demo_outcome).all(axis=1)])
+                 for r in runs]
+        pooled = np.concatenate(given) if given else np.zeros(0, dtype=np.int64)
+        if len(pooled):
+            movements, counts = np.unique(pooled, return_counts=True)
+            out[learner] = DemonstrationTimes(movements, counts, len(runs))
+    return out
+
+
 @dataclass
 class RunSummary:
     """What the metadata says about a learner's runs: how many, finished, how long."""
