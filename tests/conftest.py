@@ -23,6 +23,16 @@ def _ros_missing() -> str | None:
     return None
 
 
+def pytest_configure(config: pytest.Config) -> None:
+    """A suite started in the background by a non-interactive shell (`./test.sh &`) inherits
+    SIGINT ignored, and so would every process the tests start: the tests that stop a node
+    with Ctrl-C would find it deaf. Restore the default, as in a foreground run."""
+    import signal
+
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """Skip ROS tests outside the workspace, unless the test command demands ROS."""
     missing = _ros_missing()

@@ -460,6 +460,9 @@ def _interrupt(*_: object) -> None:
 def main(args: list[str] | None = None) -> int:
     # Our own Ctrl-C: a KeyboardInterrupt in the reading thread, not rclpy's shutdown.
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    # Ctrl-C is how the person leaves: Python leaves SIGINT ignored when the process started
+    # with it ignored (a background job of a script), so install it whatever we inherited.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, _interrupt)  # the launcher's stop: the same clean goodbye
     interactive = sys.stdin.isatty()
     try:
