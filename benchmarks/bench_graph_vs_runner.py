@@ -1,7 +1,9 @@
 """Time one learner through the node graph (recorded) against the single-process runner.
 
-Prints both wall times, their ratio (target: graph <= 1.5 x runner) and whether the two runs
-made the same movements. Run inside the workspace environment:
+Prints both wall times, their ratio (issue 11's target: graph <= 1.1 x runner), whether the two
+runs made the same movements, and where the graph's CPU goes: each node's CPU seconds
+(sampled from /proc while the run lasts) against the runner's, per movement. Run inside the
+workspace environment:
 
     source ros_ws/env.sh && python benchmarks/bench_graph_vs_runner.py --movements 5000
 """
@@ -10,15 +12,64 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import resource
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
 import numpy as np
 
 REPO = Path(__file__).resolve().parent.parent
+
+
+TICK = os.sysconf("SC_CLK_TCK")
+
+
+def node_cpu(pid: int) -> tuple[str, float] | None:
+    """(node name, CPU seconds so far) of a node process of the run, from /proc."""
+    try:
+        argv = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except (OSError, IndexError):
+        return None
+    exe = next((a.decode() for a in argv if b"/lib/" in a), "")
+    name = exe.rsplit("/", 1)[-1] or "?"
+    return name, (int(fields[11]) + int(fields[12])) / TICK
+
+
+class CpuSampler(threading.Thread):
+    """The largest CPU time seen for each node process of the run, until stopped: a process's
+    CPU time only grows, and the last sample before it exits is close to its total."""
+
+    def __init__(self, run_dir: Path, period: float = 0.5) -> None:
+        super().__init__(daemon=True)
+        self.run_dir, self.period = run_dir, period
+        self.seen: dict[int, tuple[str, float]] = {}
+        self.stopping = threading.Event()
+
+    def run(self) -> None:
+        from sgim_nodes.graph.processes import run_node_pids
+
+        while not self.stopping.wait(self.period):
+            for pid in run_node_pids(self.run_dir):
+                sample = node_cpu(pid)
+                if sample is not None:
+                    self.seen[pid] = sample
+
+    def per_node(self) -> dict[str, float]:
+        out: dict[str, float] = {}
+        for name, cpu in self.seen.values():
+            out[name] = out.get(name, 0.0) + cpu
+        return dict(sorted(out.items(), key=lambda kv: -kv[1]))
+
+
+def children_cpu() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
 
 
 def main() -> int:
@@ -32,16 +83,20 @@ def main() -> int:
     common = ["--seed", str(args.seed), "--movements", str(args.movements), "--eval-every",
               str(args.eval_every)]
 
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), children_cpu()
     subprocess.run([sys.executable, "-m", "sgim_nodes.core.runner", "--learner", args.learner,
                     "--env", "fishing", "--output", str(out / "runner.jsonl"), "--quiet",
                     *common], check=True)
-    runner_s = time.perf_counter() - start
+    runner_s, runner_cpu = time.perf_counter() - start, children_cpu() - cpu
 
+    sampler = CpuSampler(out / "graph")
+    sampler.start()
     start = time.perf_counter()
     subprocess.run([str(REPO / "ros_ws" / "run_experiment.sh"), args.learner, *common,
                     "--runs-dir", str(out), "--name", "graph", "--quiet"], check=True)
     graph_s = time.perf_counter() - start
+    sampler.stopping.set()
+    sampler.join()
 
     from sgim_nodes.bag.reader import load_run
 
@@ -55,8 +110,15 @@ def main() -> int:
           f"evaluation every {args.eval_every}")
     print(f"single-process runner: {runner_s:7.1f} s")
     print(f"node graph, recorded:  {graph_s:7.1f} s (start-up and shutdown included)")
-    print(f"ratio graph / runner:  {graph_s / runner_s:7.2f}  (target <= 1.5)")
+    print(f"ratio graph / runner:  {graph_s / runner_s:7.2f}  (target <= 1.1)")
     print(f"same movements:        {same}")
+    per_node = sampler.per_node()
+    n = max(args.movements, 1)
+    print(f"CPU: runner {runner_cpu:.1f} s ({1000 * runner_cpu / n:.1f} ms per movement); "
+          f"graph nodes {sum(per_node.values()):.1f} s "
+          f"({1000 * sum(per_node.values()) / n:.1f} ms per movement):")
+    for name, cpu in per_node.items():
+        print(f"  {name:20s} {cpu:7.1f} s  {1000 * cpu / n:6.2f} ms per movement")
     print(f"outputs in {out}")
     return 0
 
