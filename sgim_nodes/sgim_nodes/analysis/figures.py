@@ -158,9 +158,9 @@ def plot_landings(study: Study, frames: Sequence[int], path: Path,
     fig.suptitle("Where the hook landed (share of the frame's landings per bin, pooled over "
                  f"seeds; {'cumulated' if cumulative else 'separate'} time frames; dashed: "
                  "isolated region)", fontsize=10)
-    fig.tight_layout(rect=(0, 0, 0.88, 0.96))
+    fig.tight_layout(rect=(0, 0, 0.86, 0.96))
     if mesh is not None:
-        fig.colorbar(mesh, cax=fig.add_axes((0.9, 0.15, 0.02, 0.7)), label="share of landings")
+        fig.colorbar(mesh, cax=fig.add_axes((0.88, 0.15, 0.02, 0.7)), label="share of landings")
     fig.savefig(path, dpi=DPI)
     plt.close(fig)
     return path
