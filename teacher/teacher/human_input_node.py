@@ -37,6 +37,7 @@ import sys
 import threading
 import time
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
 from typing import TextIO
 
@@ -422,7 +423,7 @@ class PipeLines:
             return line
 
 
-def run(node: HumanInputNode, read_line=input) -> str:
+def run(node: HumanInputNode, read_line: Callable[[str], str] = input) -> str:
     """Read and obey lines until quit, end of input or the run's end; returns why it ended."""
     spinner = Spinner(node)
     spinner.start()
