@@ -96,6 +96,7 @@ def test_run_summaries_from_metadata(study: Path) -> None:
     assert (summary.runs, summary.finished, summary.seeds) == (3, 3, [0, 1, 2])
     assert summary.total_duration_s == pytest.approx(33.0)
     assert summary.mean_duration_s == pytest.approx(11.0)
+    assert summary.demonstrations == [0, 0, 0]  # the synthetic study has no teacher
 
 
 def _coverage(learner: str, own: list[int], outcomes: int = 1000) -> Coverage:
@@ -134,7 +135,8 @@ class _Runs:
 
 
 class _Run:
-    def __init__(self, given: dict[int, bool]) -> None:
+    def __init__(self, given: dict[int, bool], seed: int = 0) -> None:
+        self.seed, self.finished, self.movements_done, self.duration_s = seed, True, 450, 9.0
         self.demo_index = np.array(list(given), dtype=np.int64)
         self.demo_outcome = np.array([[0.1, 0.2] if shown else [np.nan, np.nan]
                                       for shown in given.values()]).reshape(-1, 2)
@@ -150,6 +152,15 @@ def test_demonstration_times_count_only_shown_demonstrations_per_run() -> None:
     assert times["sgim-d"].movements.tolist() == [0, 150, 300]
     assert times["sgim-d"].runs_with_one.tolist() == [2, 1, 1]
     assert times["sgim-d"].runs == 2
+
+
+def test_run_summaries_count_each_runs_shown_demonstrations() -> None:
+    study = _Runs({"sgim-d": [_Run({0: True, 150: True}, seed=0),
+                              _Run({0: True, 150: False, 300: True, 450: False}, seed=1)],
+                   "random": [_Run({}, seed=0)]})
+    summaries = run_summaries(study)
+    assert summaries["sgim-d"].demonstrations == [2, 2]
+    assert summaries["random"].demonstrations == [0]
 
 
 def test_separate_time_frames_hold_each_landing_once(study: Path) -> None:

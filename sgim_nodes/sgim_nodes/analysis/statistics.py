@@ -266,13 +266,18 @@ class DemonstrationTimes:
     runs: int
 
 
+def _shown_demonstrations(run) -> np.ndarray:
+    """The movement counts at which a run was shown a demonstration (the teacher's "nothing to
+    show" turns, recorded with a NaN outcome, left out)."""
+    return np.unique(run.demo_index[np.isfinite(run.demo_outcome).all(axis=1)])
+
+
 def demonstration_times(study: Study) -> dict[str, DemonstrationTimes]:
     """Learners whose runs got at least one demonstration."""
     out = {}
     for learner in study.learners:
         runs = study.runs_of(learner)
-        given = [np.unique(r.demo_index[np.isfinite(r.demo_outcome).all(axis=1)])
-                 for r in runs]
+        given = [_shown_demonstrations(r) for r in runs]
         pooled = np.concatenate(given) if given else np.zeros(0, dtype=np.int64)
         if len(pooled):
             movements, counts = np.unique(pooled, return_counts=True)
@@ -282,7 +287,8 @@ def demonstration_times(study: Study) -> dict[str, DemonstrationTimes]:
 
 @dataclass
 class RunSummary:
-    """What the metadata says about a learner's runs: how many, finished, how long."""
+    """What the metadata says about a learner's runs: how many, finished, how long; and how
+    many demonstrations each run was shown (issue 11: the teacher must keep teaching)."""
 
     learner: str
     runs: int
@@ -291,6 +297,7 @@ class RunSummary:
     movements: list[int]
     total_duration_s: float | None
     mean_duration_s: float | None
+    demonstrations: list[int]
 
 
 def run_summaries(study: Study) -> dict[str, RunSummary]:
@@ -301,5 +308,6 @@ def run_summaries(study: Study) -> dict[str, RunSummary]:
         out[learner] = RunSummary(
             learner, len(runs), sum(r.finished for r in runs), [r.seed for r in runs],
             [r.movements_done for r in runs], float(sum(durations)) if durations else None,
-            float(np.mean(durations)) if durations else None)
+            float(np.mean(durations)) if durations else None,
+            [len(_shown_demonstrations(r)) for r in runs])
     return out
