@@ -20,8 +20,8 @@ Interfaces:
   subscribes  movements, demonstrations_taken, run_status
   publishes   demonstrations (sgim_msgs/Demonstration)
 Parameters: the common ones, the memory and inverse-model fields of LearnerConfig,
-demonstration_period, reached_rule, tolerance_noise, noise (of the teacher's own world),
-teaching_set, movements.
+demonstration_period, reached_rule, teacher_choice, tolerance_noise, noise (of the teacher's
+own world), teaching_set, movements.
 """
 
 from __future__ import annotations
@@ -37,10 +37,12 @@ from sgim_nodes.core.random_streams import component_rng, world_seed
 from sgim_nodes.core.teaching import (
     ABILITY,
     DEFAULT_REACHED_RULE,
+    DEFAULT_TEACHER_CHOICE,
     DEFAULT_TOLERANCE_NOISE,
     OWN_PROCESSES,
     PAPER_PERIOD,
     REACHED_RULES,
+    TEACHER_CHOICES,
     Teacher,
     learner_progress,
 )
@@ -66,6 +68,10 @@ PARAMS = learner_node_params(
           "'ability' (the learner's inverse model cast for it lands within the tolerance) or "
           "'own-movements' (one of its own movements landed there); core/teaching.py",
           one_of(*REACHED_RULES)),
+    Param("teacher_choice", DEFAULT_TEACHER_CHOICE, "which unreached teaching goal it "
+          "demonstrates: 'random-unreached' (the paper), 'farthest-unreached' or "
+          "'nearest-unreached' (from what the learner can do); core/teaching.py",
+          one_of(*TEACHER_CHOICES)),
     Param("tolerance_noise", DEFAULT_TOLERANCE_NOISE, "a teaching goal counts as reached "
           "within this many units of the world's outcome noise", non_negative),
     Param("noise", DEFAULT_NOISE, "motor-command noise of the teacher's own world (the "
@@ -88,7 +94,8 @@ class TeacherNode(Node):
                                  f"{p['outcome_size']}")
         self.teacher = Teacher(ts.actions, ts.outcomes, component_rng(p["seed"], "teacher"),
                                p["demonstration_period"],
-                               p["tolerance_noise"] * p["outcome_noise"])
+                               p["tolerance_noise"] * p["outcome_noise"],
+                               p["teacher_choice"])
         self.rule = p["reached_rule"]
         self.action_size = p["action_size"]
         self.world = (FishingWorld(seed=world_seed(p["seed"], "teacher-world"),
@@ -118,7 +125,8 @@ class TeacherNode(Node):
             "run_status": self.create_subscription(
                 RunStatus, "run_status", self._on_status, qos.RECORDS)})
         self.get_logger().info(f"{len(ts.actions)} teaching entries, period "
-                               f"{p['demonstration_period']}, reached rule {self.rule}")
+                               f"{p['demonstration_period']}, reached rule {self.rule}, "
+                               f"choice {p['teacher_choice']}")
 
     @property
     def count(self) -> int:

@@ -8,7 +8,11 @@ from sgim_nodes.core.planar_arm import PlanarArm
 from sgim_nodes.core.teaching import (
     ABILITY,
     DEFAULT_REACHED_RULE,
+    FARTHEST_UNREACHED,
+    NEAREST_UNREACHED,
     OWN_MOVEMENTS,
+    RANDOM_UNREACHED,
+    TEACHER_CHOICES,
     Teacher,
     cast_distance,
     learner_progress,
@@ -201,3 +205,66 @@ def test_unknown_rule_is_refused():
     learner = runner.make_learner("sgim-d", 12, 2, 0, None, world.scale)
     with pytest.raises(ValueError, match="reached rule"):
         runner.run(learner, world, 10, 0, 0, lambda r: None, teacher_rule="lucky")
+
+
+# --- which unreached goal (issue 14: teacher_choice) ------------------------------------------
+
+FIVE = np.array([[0.0, 0.0], [0.2, 0.0], [0.5, 0.0], [0.9, 0.0], [-0.6, 0.0]])
+
+
+def _five(choice: str, seed: int = 0) -> Teacher:
+    return Teacher(np.zeros((5, 3)), FIVE, np.random.default_rng(seed), tolerance=0.05,
+                   choice=choice)
+
+
+def test_farthest_and_nearest_unreached_pick_by_the_learners_distance():
+    reached = np.array([[0.01, 0.0], [0.25, 0.0]])  # goal 0 reached; 1 at 0.05 is reached too
+    d = _five(RANDOM_UNREACHED).distances(reached)
+    assert d.round(3).tolist() == [0.01, 0.05, 0.25, 0.65, 0.61]
+    assert {_five(FARTHEST_UNREACHED).choose(reached).index for _ in range(20)} == {3}
+    assert {_five(NEAREST_UNREACHED).choose(reached).index for _ in range(20)} == {2}
+    picks = {_five(RANDOM_UNREACHED, s).choose(reached).index for s in range(40)}
+    assert picks == {2, 3, 4}  # the paper's rule: any unreached one, never 0 or 1
+
+
+def test_choice_ties_are_broken_at_random_and_reached_goals_never_chosen():
+    nothing = np.empty((0, 2))  # nothing reached: every goal infinitely far, all tied
+    for choice in TEACHER_CHOICES:
+        picks = {_five(choice, s).choose(nothing).index for s in range(60)}
+        assert picks == {0, 1, 2, 3, 4}, choice
+    for choice in TEACHER_CHOICES:
+        assert _five(choice).choose(FIVE + 0.01) is None
+
+
+def test_unknown_choice_refused():
+    with pytest.raises(ValueError, match="teacher choice"):
+        _five("best-guess")
+
+
+@pytest.mark.parametrize("choice", [FARTHEST_UNREACHED, NEAREST_UNREACHED])
+def test_the_runner_demonstrates_what_the_choice_rule_picks(choice):
+    """On the planar arm, with the own-movements rule (so that the learner's state at each turn
+    can be rebuilt from the run's own records): every demonstration is the unreached teaching
+    goal farthest from (nearest to) the learner's own outcomes at that turn."""
+    from sgim_nodes.core import runner
+    from sgim_nodes.core.teaching import OWN_PROCESSES
+
+    world = runner.build_world("planar-arm", 3)
+    learner = runner.make_learner("sgim-d", 12, 2, 3, None, world.scale)
+    records: list[dict] = []
+    runner.run(learner, world, 400, 0, 3, records.append, teacher_period=40,
+               teacher_tolerance_noise=1.0, teacher_rule=OWN_MOVEMENTS, teacher_choice=choice)
+    tolerance = 1.0 * world.scale.noise
+    goals = world.teaching_outcomes
+    demos = [r for r in records if r["type"] == "demonstration"]
+    assert len(demos) >= 5
+    for demo in demos:
+        own = np.array([r["outcome"] for r in records if r["type"] == "movement"
+                        and r["index"] < demo["movement"] and r["outcome"] is not None
+                        and r["label"] in OWN_PROCESSES]).reshape(-1, 2)
+        d = (np.full(len(goals), np.inf) if len(own) == 0 else
+             np.linalg.norm(goals[:, None, :] - own[None, :, :], axis=2).min(axis=1))
+        unreached = np.flatnonzero(d > tolerance)
+        best = d[unreached].max() if choice == FARTHEST_UNREACHED else d[unreached].min()
+        assert demo["teaching_index"] in unreached
+        assert d[demo["teaching_index"]] == best

@@ -46,7 +46,7 @@ def finish(child, tmp_path, learner, timeout=330):
 TOLERANCE = {"sgim-d": 8.0, "demo-only": 0.7}  # in units of the outcome noise (0.07)
 
 
-def run_single_process(learner):
+def run_single_process(learner, **teacher):
     from sgim_nodes.core.learners import make_learner
     from sgim_nodes.core.runner import build_world, run
 
@@ -55,8 +55,27 @@ def run_single_process(learner):
                             scale=world.scale)
     records: list[dict] = []
     run(learner_, world, MOVEMENTS, EVAL_EVERY, SEED, records.append, teacher_period=PERIOD,
-        teacher_tolerance_noise=TOLERANCE.get(learner, 1.0))
+        teacher_tolerance_noise=TOLERANCE.get(learner, 1.0), **teacher)
     return records
+
+
+def test_the_teachers_choice_rule_through_the_graph(ros_processes, ros_domain, tmp_path):
+    """teacher_choice (issue 14) as a node parameter: the graph's teacher demonstrates the
+    same goals as the runner's with the same rule, and the learner makes the same movements."""
+    choice = "farthest-unreached"
+    run = finish(run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--param",
+                           f"tolerance_noise={TOLERANCE['sgim-d']}", "--param",
+                           f"teacher_choice={choice}"), tmp_path, "sgim-d")
+    records = run_single_process("sgim-d", teacher_choice=choice)
+    shown = [d.teaching_set_index for d in run.demonstrations if len(d.action)]
+    expected = [r["teaching_index"] for r in records if r["type"] == "demonstration"]
+    assert shown == expected and len(shown) >= 3
+    default = [r["teaching_index"] for r in run_single_process("sgim-d")
+               if r["type"] == "demonstration"]
+    assert default != expected  # the rule changed what was taught
+    moves = [r for r in records if r["type"] == "movement"]
+    for graph_move, move in zip(run.movements, moves, strict=True):
+        assert np.array_equal(graph_move.action, np.asarray(move["action"])), graph_move.index
 
 
 @pytest.mark.parametrize("learner", ["sgim-d", "saggriac", "random-goals", "demo-only",

@@ -32,9 +32,12 @@ from .scale import WorldScale, unit_box
 from .teaching import (
     ABILITY,
     DEFAULT_REACHED_RULE,
+    DEFAULT_TEACHER_CHOICE,
     DEFAULT_TOLERANCE_NOISE,
     REACHED_RULES,
+    TEACHER_CHOICES,
     Teacher,
+    check_choice,
     check_rule,
     learner_progress,
 )
@@ -122,19 +125,22 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
         seed: int, write: Callable[[dict[str, Any]], None],
         teacher_period: int = 150, teacher_tolerance_noise: float = DEFAULT_TOLERANCE_NOISE,
         progress: Callable[[int], None] | None = None,
-        teacher_rule: str = DEFAULT_REACHED_RULE) -> list[float]:
+        teacher_rule: str = DEFAULT_REACHED_RULE,
+        teacher_choice: str = DEFAULT_TEACHER_CHOICE) -> list[float]:
     """Drive ``learner`` for ``movements`` movements; returns the evaluation means.
 
     Evaluations happen at 0, every ``eval_every`` movements and at the end.  Social learners
     get a demonstration whenever the teacher is due (movements 0, P, 2P, ...) and some
-    teaching goal is unreached under ``teacher_rule`` (core/teaching.py).
+    teaching goal is unreached under ``teacher_rule``, the one ``teacher_choice`` picks
+    (core/teaching.py).
     """
     check_rule(teacher_rule)
+    check_choice(teacher_choice)
     teacher, teacher_env = None, None
     if learner.social and world.teaching_actions is not None:
         teacher = Teacher(world.teaching_actions, world.teaching_outcomes,
                           component_rng(seed, "teacher"), teacher_period,
-                          teacher_tolerance_noise * world.scale.noise)
+                          teacher_tolerance_noise * world.scale.noise, teacher_choice)
         if teacher_rule == ABILITY:
             if world.make_teacher_env is None:
                 raise ValueError("the teacher's 'ability' rule needs world.make_teacher_env")
@@ -215,6 +221,10 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                         "the learner's inverse model cast for it lands within the tolerance; "
                         "'own-movements', one of its own movements landed there "
                         "(default: %(default)s)")
+    p.add_argument("--teacher-choice", choices=TEACHER_CHOICES, default=DEFAULT_TEACHER_CHOICE,
+                   help="which unreached teaching goal the teacher demonstrates: at random "
+                        "(the paper), the farthest from what the learner can do, or the "
+                        "nearest (core/teaching.py; default: %(default)s)")
     p.add_argument("--teacher-tolerance-noise", type=float, default=DEFAULT_TOLERANCE_NOISE,
                    help="a teaching goal is reached within this many units of the world's "
                         "outcome noise (default: %(default)s)")
@@ -261,11 +271,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                "scale": {"low": list(world.scale.low), "high": list(world.scale.high),
                          "noise": world.scale.noise},
                "teacher": {"period": args.teacher_period, "rule": args.teacher_rule,
+                           "choice": args.teacher_choice,
                            "tolerance_noise": args.teacher_tolerance_noise},
                "config": config.to_dict()})
         means = run(learner, world, args.movements, args.eval_every, args.seed, write,
                     args.teacher_period, args.teacher_tolerance_noise, progress=bar.update,
-                    teacher_rule=args.teacher_rule)
+                    teacher_rule=args.teacher_rule, teacher_choice=args.teacher_choice)
         demos = learner.memory.labels.count("demonstration")
         turns = len(range(0, args.movements, args.teacher_period)) if learner.social else 0
         write({"type": "end", "final_mean_distance": means[-1], "n_memory": len(learner.memory),

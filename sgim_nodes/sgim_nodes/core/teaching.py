@@ -28,6 +28,13 @@ paper's teacher knows the learner's state, so it may ask the learner itself. Two
 
 The tolerance is a multiple of the world's outcome noise (``DEFAULT_TOLERANCE_NOISE``). When
 every goal is reached the teacher gives nothing at that turn.
+
+Which unreached goal (``TEACHER_CHOICES``, issue 14; the paper's Section III lists the teacher's
+choice among "a random one among the unreached goals", its own, and leaves the others to future
+work): ``random-unreached`` (the paper's), ``farthest-unreached`` (the goal the learner's
+ability, as measured by the reached rule, lands farthest from: what it can do least) and
+``nearest-unreached`` (the closest to being reached: what it almost can do). Ties, e.g. goals
+the learner has nothing near yet, are broken at random with the teacher's stream.
 """
 
 from __future__ import annotations
@@ -50,6 +57,11 @@ ABILITY = "ability"
 OWN_MOVEMENTS = "own-movements"
 REACHED_RULES = (ABILITY, OWN_MOVEMENTS)
 DEFAULT_REACHED_RULE = ABILITY
+RANDOM_UNREACHED = "random-unreached"
+FARTHEST_UNREACHED = "farthest-unreached"
+NEAREST_UNREACHED = "nearest-unreached"
+TEACHER_CHOICES = (RANDOM_UNREACHED, FARTHEST_UNREACHED, NEAREST_UNREACHED)
+DEFAULT_TEACHER_CHOICE = RANDOM_UNREACHED
 
 
 @dataclass(frozen=True)
@@ -66,10 +78,12 @@ Reached = np.ndarray | Callable[[np.ndarray], float]
 
 class Teacher:
     def __init__(self, actions: np.ndarray, outcomes: np.ndarray, rng: np.random.Generator,
-                 period: int = PAPER_PERIOD, tolerance: float = 0.05) -> None:
+                 period: int = PAPER_PERIOD, tolerance: float = 0.05,
+                 choice: str = DEFAULT_TEACHER_CHOICE) -> None:
         """``tolerance``: Euclidean distance in outcome units under which a teaching goal
         counts as reached; chosen below the paper's outcome noise 0.073 but above typical
-        inverse-model errors on reached points."""
+        inverse-model errors on reached points. ``choice``: which unreached goal
+        (``TEACHER_CHOICES``)."""
         self.actions = np.asarray(actions, dtype=float)
         self.outcomes = np.asarray(outcomes, dtype=float)
         if len(self.actions) != len(self.outcomes) or len(self.actions) == 0:
@@ -81,30 +95,45 @@ class Teacher:
         self.rng = rng
         self.period = period
         self.tolerance = tolerance
+        self.choice = check_choice(choice)
 
     def due(self, movements: int) -> bool:
         """True at movements 0, P, 2P, ... (a demonstration before the first movement too,
         so that demo-only has something to vary from the start)."""
         return movements % self.period == 0
 
+    def distances(self, reached: Reached) -> np.ndarray:
+        """How far the learner is from each teaching goal (inf: nothing reached at all)."""
+        if callable(reached):
+            return np.array([float(reached(y)) for y in self.outcomes])
+        r = np.asarray(reached, dtype=float).reshape(-1, self.outcomes.shape[1])
+        if len(r) == 0:
+            return np.full(len(self.outcomes), np.inf)
+        return np.sqrt(((self.outcomes[:, None, :] - r[None, :, :]) ** 2).sum(-1)).min(1)
+
     def unreached(self, reached: Reached) -> np.ndarray:
         """Indices of teaching goals farther than ``tolerance`` from every reached outcome."""
-        if callable(reached):
-            d = np.array([float(reached(y)) for y in self.outcomes])
-        else:
-            r = np.asarray(reached, dtype=float).reshape(-1, self.outcomes.shape[1])
-            if len(r) == 0:
-                return np.arange(len(self.outcomes))
-            d = np.sqrt(((self.outcomes[:, None, :] - r[None, :, :]) ** 2).sum(-1)).min(1)
-        return np.flatnonzero(d > self.tolerance)
+        return np.flatnonzero(self.distances(reached) > self.tolerance)
 
     def choose(self, reached: Reached) -> Demonstration | None:
-        """A random unreached demonstration, or None if every goal is reached."""
-        candidates = self.unreached(reached)
+        """An unreached demonstration picked by ``choice``, or None if every goal is
+        reached."""
+        d = self.distances(reached)
+        candidates = np.flatnonzero(d > self.tolerance)
         if len(candidates) == 0:
             return None
+        if self.choice == FARTHEST_UNREACHED:
+            candidates = candidates[d[candidates] == d[candidates].max()]
+        elif self.choice == NEAREST_UNREACHED:
+            candidates = candidates[d[candidates] == d[candidates].min()]
         i = int(self.rng.choice(candidates))
         return Demonstration(i, self.actions[i].copy(), self.outcomes[i].copy())
+
+
+def check_choice(choice: str) -> str:
+    if choice not in TEACHER_CHOICES:
+        raise ValueError(f"unknown teacher choice {choice!r}; choose one of {TEACHER_CHOICES}")
+    return choice
 
 
 def check_rule(rule: str) -> str:
