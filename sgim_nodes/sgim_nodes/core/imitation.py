@@ -30,13 +30,15 @@ def perturb(action: np.ndarray, epsilon: float, rng: np.random.Generator) -> np.
 class Imitation:
     """Ask/tell process: ``count`` variations of one demonstrated action."""
 
-    def __init__(self, demo_action: np.ndarray, demo_outcome: np.ndarray, count: int,
+    def __init__(self, demo_action: np.ndarray, demo_outcome: np.ndarray | None, count: int,
                  epsilon: float, rng: np.random.Generator,
                  start_distance: float = float("inf")) -> None:
         """``start_distance``: memory's distance to the demonstrated outcome before the
-        demonstration was stored (the competence of the imitation is measured against it)."""
+        demonstration was stored (the competence of the imitation is measured against it).
+        ``demo_outcome`` None: a means-only demonstration (teaching.py), the learner was not
+        told where the action lands; the imitation has no goal and no competence."""
         self.demo_action = np.asarray(demo_action, dtype=float)
-        self.goal = np.asarray(demo_outcome, dtype=float)
+        self.goal = None if demo_outcome is None else np.asarray(demo_outcome, dtype=float)
         self.count = count
         self.epsilon = epsilon
         self.rng = rng
@@ -53,7 +55,7 @@ class Imitation:
 
     def observe(self, action: np.ndarray, result: ResultLike) -> None:
         self.movements += 1
-        if is_success(result):
+        if is_success(result) and self.goal is not None:
             outcome = np.asarray(result.outcome, dtype=float)
             d = float(np.linalg.norm(outcome - self.goal))
             if d < self.best_distance:

@@ -156,9 +156,14 @@ class DemoOnlyLearner(Learner):
         super().__init__(*args, **kwargs)
         self.latest_demo: np.ndarray | None = None
 
-    def on_demonstration(self, action: np.ndarray, outcome: np.ndarray) -> None:
+    def on_demonstration(self, action: np.ndarray | None, outcome: np.ndarray | None) -> None:
+        """Only an action can be varied: a goal-only demonstration (teaching.py) is refused."""
+        if action is None:
+            raise ValueError("demo-only varies demonstrated actions: it cannot learn from a "
+                             "goal-only demonstration")
         self.latest_demo = np.asarray(action, dtype=float).copy()
-        self.memory.add(self.latest_demo, np.asarray(outcome, dtype=float), DEMONSTRATION)
+        if outcome is not None:  # a means-only demonstration: the outcome was not shown
+            self.memory.add(self.latest_demo, np.asarray(outcome, dtype=float), DEMONSTRATION)
 
     def next_action(self) -> tuple[np.ndarray, str]:
         if self.latest_demo is None:
@@ -187,24 +192,36 @@ class GoalBabblingLearner(Learner):
         self.selector = GoalSelector(self.tree, goal_mode_probabilities(c, self.name),
                                      c.distances(self.scale).mode3_radius)
         self.process: GoalAttempt | Imitation | None = None
-        # (action, outcome, memory's distance to the outcome before it was stored)
-        self.pending_demos: deque[tuple[np.ndarray, np.ndarray, float]] = deque()
+        # (action, outcome, memory's distance to the outcome before it was stored); the action
+        # is None for a goal-only demonstration, the outcome None for a means-only one
+        self.pending_demos: deque[tuple[np.ndarray | None, np.ndarray | None, float]] = deque()
         self.last_goal_mode = 0
         self.n_goals = 0
 
-    def on_demonstration(self, action: np.ndarray, outcome: np.ndarray) -> None:
+    def on_demonstration(self, action: np.ndarray | None, outcome: np.ndarray | None) -> None:
+        """Store what was shown and queue its follow-up (teaching.py's contents): with both, the
+        pair enters memory and is imitated (the paper's SGIM-D); with the outcome only, the
+        learner adopts it as its next goal (emulation); with the action only, it imitates the
+        action and learns where it lands from its own movements."""
         if not self.social:
             return
-        a = np.asarray(action, dtype=float).copy()
-        y = np.asarray(outcome, dtype=float).copy()
-        before = start_distance(self.memory.closest_distance(y), y, self.scale.centre)
-        self.memory.add(a, y, DEMONSTRATION)
+        a = None if action is None else np.asarray(action, dtype=float).copy()
+        y = None if outcome is None else np.asarray(outcome, dtype=float).copy()
+        if a is None and y is None:
+            raise ValueError("a demonstration shows an action, an outcome or both")
+        before = (float("inf") if y is None else
+                  start_distance(self.memory.closest_distance(y), y, self.scale.centre))
+        if a is not None and y is not None:
+            self.memory.add(a, y, DEMONSTRATION)
         self.pending_demos.append((a, y, before))
 
     def _new_process(self) -> GoalAttempt | Imitation:
         c = self.config
         if self.pending_demos:
             a, y, before = self.pending_demos.popleft()
+            if a is None:  # goal-only: an attempt at the demonstrated outcome, as a goal
+                return GoalAttempt(y, self.memory, self.inverse_model, c, self.scale,
+                                   self.rngs.explorer, self.action_dim, self.probe_scale)
             if c.imitation_count > 0:
                 return Imitation(a, y, c.imitation_count, c.imitation_epsilon,
                                  self.rngs.imitation, start_distance=before)
@@ -246,8 +263,11 @@ class GoalBabblingLearner(Learner):
         if p.done:
             self._record_competence(p)
 
-    def _record_competence(self, process: GoalAttempt | Imitation) -> float:
-        """Competence of the attempt (or imitation) against memory before it (competence.py)."""
+    def _record_competence(self, process: GoalAttempt | Imitation) -> float | None:
+        """Competence of the attempt (or imitation) against memory before it (competence.py);
+        None for a means-only imitation, which has no goal."""
+        if process.goal is None:
+            return None
         d = self.config.distances(self.scale)
         reference = (process.start_distance if self.config.competence_reference == "memory"
                      else d.competence_radius)

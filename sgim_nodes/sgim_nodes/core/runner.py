@@ -31,13 +31,17 @@ from .random_streams import component_rng, world_seed
 from .scale import WorldScale, unit_box
 from .teaching import (
     ABILITY,
+    DEFAULT_DEMONSTRATION_CONTENT,
     DEFAULT_REACHED_RULE,
     DEFAULT_TEACHER_CHOICE,
     DEFAULT_TOLERANCE_NOISE,
+    DEMONSTRATION_CONTENTS,
+    GOAL_ONLY,
     REACHED_RULES,
     TEACHER_CHOICES,
     Teacher,
     check_choice,
+    check_content,
     check_rule,
     learner_progress,
 )
@@ -126,16 +130,21 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
         teacher_period: int = 150, teacher_tolerance_noise: float = DEFAULT_TOLERANCE_NOISE,
         progress: Callable[[int], None] | None = None,
         teacher_rule: str = DEFAULT_REACHED_RULE,
-        teacher_choice: str = DEFAULT_TEACHER_CHOICE) -> list[float]:
+        teacher_choice: str = DEFAULT_TEACHER_CHOICE,
+        demonstration_content: str = DEFAULT_DEMONSTRATION_CONTENT) -> list[float]:
     """Drive ``learner`` for ``movements`` movements; returns the evaluation means.
 
     Evaluations happen at 0, every ``eval_every`` movements and at the end.  Social learners
     get a demonstration whenever the teacher is due (movements 0, P, 2P, ...) and some
-    teaching goal is unreached under ``teacher_rule``, the one ``teacher_choice`` picks
-    (core/teaching.py).
+    teaching goal is unreached under ``teacher_rule``, the one ``teacher_choice`` picks, showing
+    what ``demonstration_content`` says (core/teaching.py).
     """
     check_rule(teacher_rule)
     check_choice(teacher_choice)
+    check_content(demonstration_content)
+    if learner.name == "demo-only" and demonstration_content == GOAL_ONLY:
+        raise ValueError("demo-only varies demonstrated actions: it needs them shown "
+                         "(demonstration_content means-and-goal or means-only)")
     teacher, teacher_env = None, None
     if learner.social and world.teaching_actions is not None:
         teacher = Teacher(world.teaching_actions, world.teaching_outcomes,
@@ -147,7 +156,7 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
             teacher_env = world.make_teacher_env()
     try:
         return _run(learner, world, movements, eval_every, write, teacher, teacher_rule,
-                    teacher_env, progress)
+                    teacher_env, progress, demonstration_content)
     finally:
         if teacher_env is not None and hasattr(teacher_env, "close"):
             teacher_env.close()
@@ -155,8 +164,8 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
 
 def _run(learner: Learner, world: World, movements: int, eval_every: int,
          write: Callable[[dict[str, Any]], None], teacher: Teacher | None, teacher_rule: str,
-         teacher_env: Environment | None, progress: Callable[[int], None] | None
-         ) -> list[float]:
+         teacher_env: Environment | None, progress: Callable[[int], None] | None,
+         content: str = DEFAULT_DEMONSTRATION_CONTENT) -> list[float]:
     evaluator = Evaluator(world.eval_env, world.goals, world.scale.diagonal)
     means: list[float] = []
 
@@ -173,9 +182,10 @@ def _run(learner: Learner, world: World, movements: int, eval_every: int,
             demo = teacher.choose(learner_progress(teacher_rule, learner.inverse,
                                                    learner.own_outcomes, teacher_env))
             if demo is not None:
-                learner.on_demonstration(demo.action, demo.outcome)
+                action, outcome = demo.shown(content)
+                learner.on_demonstration(action, outcome)
                 write({"type": "demonstration", "movement": i, "teaching_index": demo.index,
-                       "action": _vec(demo.action), "outcome": _vec(demo.outcome)})
+                       "content": content, "action": _vec(action), "outcome": _vec(outcome)})
         action, label = learner.next_action()
         result = world.env.execute(action)
         learner.observe(action, result)
@@ -225,6 +235,11 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                    help="which unreached teaching goal the teacher demonstrates: at random "
                         "(the paper), the farthest from what the learner can do, or the "
                         "nearest (core/teaching.py; default: %(default)s)")
+    p.add_argument("--demonstration-content", choices=DEMONSTRATION_CONTENTS,
+                   default=DEFAULT_DEMONSTRATION_CONTENT,
+                   help="what a demonstration shows the learner: the action and its outcome "
+                        "(the paper), the outcome only (emulation) or the action only "
+                        "(core/teaching.py; default: %(default)s)")
     p.add_argument("--teacher-tolerance-noise", type=float, default=DEFAULT_TOLERANCE_NOISE,
                    help="a teaching goal is reached within this many units of the world's "
                         "outcome noise (default: %(default)s)")
@@ -238,6 +253,9 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         p.error("--teacher-tolerance-noise must be >= 0")
     if args.pond_radius is not None and args.env != "fishing":
         p.error("--pond-radius needs --env fishing")
+    if args.learner == "demo-only" and args.demonstration_content == GOAL_ONLY:
+        p.error("demo-only varies demonstrated actions: --demonstration-content goal-only "
+                "shows none")
     return args
 
 
@@ -258,7 +276,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     start = time.perf_counter()
     with args.output.open("w") as f, tqdm(total=args.movements, disable=args.quiet,
                                            desc=args.learner, file=sys.stderr) as bar:
+        shown = 0
+
         def write(record: dict[str, Any]) -> None:
+            nonlocal shown
+            shown += record["type"] == "demonstration"
             f.write(json.dumps(record) + "\n")
             f.flush()
 
@@ -272,12 +294,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                          "noise": world.scale.noise},
                "teacher": {"period": args.teacher_period, "rule": args.teacher_rule,
                            "choice": args.teacher_choice,
+                           "content": args.demonstration_content,
                            "tolerance_noise": args.teacher_tolerance_noise},
                "config": config.to_dict()})
         means = run(learner, world, args.movements, args.eval_every, args.seed, write,
                     args.teacher_period, args.teacher_tolerance_noise, progress=bar.update,
-                    teacher_rule=args.teacher_rule, teacher_choice=args.teacher_choice)
-        demos = learner.memory.labels.count("demonstration")
+                    teacher_rule=args.teacher_rule, teacher_choice=args.teacher_choice,
+                    demonstration_content=args.demonstration_content)
+        demos = shown  # what the teacher showed (goal- or means-only ones are not stored)
         turns = len(range(0, args.movements, args.teacher_period)) if learner.social else 0
         write({"type": "end", "final_mean_distance": means[-1], "n_memory": len(learner.memory),
                "n_demonstrations": demos, "n_teacher_turns": turns,

@@ -62,6 +62,11 @@ FARTHEST_UNREACHED = "farthest-unreached"
 NEAREST_UNREACHED = "nearest-unreached"
 TEACHER_CHOICES = (RANDOM_UNREACHED, FARTHEST_UNREACHED, NEAREST_UNREACHED)
 DEFAULT_TEACHER_CHOICE = RANDOM_UNREACHED
+MEANS_AND_GOAL = "means-and-goal"
+GOAL_ONLY = "goal-only"
+MEANS_ONLY = "means-only"
+DEMONSTRATION_CONTENTS = (MEANS_AND_GOAL, GOAL_ONLY, MEANS_ONLY)
+DEFAULT_DEMONSTRATION_CONTENT = MEANS_AND_GOAL
 
 
 @dataclass(frozen=True)
@@ -69,6 +74,16 @@ class Demonstration:
     index: int  # row of the teaching set
     action: np.ndarray
     outcome: np.ndarray
+
+    def shown(self, content: str) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """(action, outcome) as the learner is given them under ``content``
+        (``DEMONSTRATION_CONTENTS``, issue 14; the paper's Section III): both (``means-and-goal``,
+        the paper's SGIM-D), the outcome only (``goal-only``: emulation, the learner adopts it
+        as a goal and is never told the action), or the action only (``means-only``: the learner
+        executes it and observes the outcome itself). What is not shown is None."""
+        check_content(content)
+        return (None if content == GOAL_ONLY else self.action.copy(),
+                None if content == MEANS_ONLY else self.outcome.copy())
 
 
 # The learner's progress, as either its reached outcomes (K, m) or a callable giving the
@@ -134,6 +149,13 @@ def check_choice(choice: str) -> str:
     if choice not in TEACHER_CHOICES:
         raise ValueError(f"unknown teacher choice {choice!r}; choose one of {TEACHER_CHOICES}")
     return choice
+
+
+def check_content(content: str) -> str:
+    if content not in DEMONSTRATION_CONTENTS:
+        raise ValueError(f"unknown demonstration content {content!r}; choose one of "
+                         f"{DEMONSTRATION_CONTENTS}")
+    return content
 
 
 def check_rule(rule: str) -> str:
