@@ -22,6 +22,7 @@ Successful movements are stored in memory; failed ones count as movements but ar
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Callable
 
 import numpy as np
 
@@ -197,6 +198,10 @@ class GoalBabblingLearner(Learner):
         self.pending_demos: deque[tuple[np.ndarray | None, np.ndarray | None, float]] = deque()
         self.last_goal_mode = 0
         self.n_goals = 0
+        # Called with (goal, competence) when one of its own goal attempts ends (not an
+        # imitation): what a learner that asks for help watches (help_request.py).
+        self.attempt_listeners: list[Callable[[np.ndarray, float], None]] = []
+        self.last_attempt_goal: np.ndarray | None = None
 
     def on_demonstration(self, action: np.ndarray | None, outcome: np.ndarray | None) -> None:
         """Store what was shown and queue its follow-up (teaching.py's contents): with both, the
@@ -274,6 +279,10 @@ class GoalBabblingLearner(Learner):
         comp = competence(process.goal, process.best_outcome, reference, d.success_tolerance)
         self.tree.add(process.goal, comp)
         self.n_goals += 1
+        if isinstance(process, GoalAttempt):
+            self.last_attempt_goal = process.goal.copy()
+            for listener in self.attempt_listeners:
+                listener(process.goal, comp)
         return comp
 
 

@@ -25,6 +25,14 @@ import numpy as np
 from .config import LearnerConfig
 from .environment import Environment, is_success
 from .evaluator import EVALUATION_SEED_OFFSET, Evaluator
+from .help_request import (
+    DEFAULT_TIMING,
+    ON_REQUEST,
+    TIMINGS,
+    HelpRequests,
+    budget_for,
+    check_timing,
+)
 from .learners import LEARNER_NAMES, Learner, make_learner
 from .planar_arm import ARMS, PlanarArm, benchmark_goals, teaching_set
 from .random_streams import component_rng, world_seed
@@ -131,17 +139,24 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
         progress: Callable[[int], None] | None = None,
         teacher_rule: str = DEFAULT_REACHED_RULE,
         teacher_choice: str = DEFAULT_TEACHER_CHOICE,
-        demonstration_content: str = DEFAULT_DEMONSTRATION_CONTENT) -> list[float]:
+        demonstration_content: str = DEFAULT_DEMONSTRATION_CONTENT,
+        timing: str = DEFAULT_TIMING) -> list[float]:
     """Drive ``learner`` for ``movements`` movements; returns the evaluation means.
 
     Evaluations happen at 0, every ``eval_every`` movements and at the end.  Social learners
     get a demonstration whenever the teacher is due (movements 0, P, 2P, ...) and some
     teaching goal is unreached under ``teacher_rule``, the one ``teacher_choice`` picks, showing
-    what ``demonstration_content`` says (core/teaching.py).
+    what ``demonstration_content`` says (core/teaching.py). With ``timing`` "on-request" the
+    teacher speaks only when the learner asks (core/help_request.py), at most as many times as
+    the periodic teacher's turns.
     """
     check_rule(teacher_rule)
     check_choice(teacher_choice)
     check_content(demonstration_content)
+    check_timing(timing)
+    if learner.name == "demo-only" and timing == ON_REQUEST:
+        raise ValueError("demo-only attempts no goals, so it never asks: timing on-request "
+                         "needs sgim-d")
     if learner.name == "demo-only" and demonstration_content == GOAL_ONLY:
         raise ValueError("demo-only varies demonstrated actions: it needs them shown "
                          "(demonstration_content means-and-goal or means-only)")
@@ -155,8 +170,12 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
                 raise ValueError("the teacher's 'ability' rule needs world.make_teacher_env")
             teacher_env = world.make_teacher_env()
     try:
+        requests = None
+        if teacher is not None and timing == ON_REQUEST:
+            requests = HelpRequests(budget_for(movements, teacher_period))
+            learner.attempt_listeners.append(lambda _goal, c: requests.attempt_ended(c))
         return _run(learner, world, movements, eval_every, write, teacher, teacher_rule,
-                    teacher_env, progress, demonstration_content)
+                    teacher_env, progress, demonstration_content, requests)
     finally:
         if teacher_env is not None and hasattr(teacher_env, "close"):
             teacher_env.close()
@@ -165,7 +184,8 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
 def _run(learner: Learner, world: World, movements: int, eval_every: int,
          write: Callable[[dict[str, Any]], None], teacher: Teacher | None, teacher_rule: str,
          teacher_env: Environment | None, progress: Callable[[int], None] | None,
-         content: str = DEFAULT_DEMONSTRATION_CONTENT) -> list[float]:
+         content: str = DEFAULT_DEMONSTRATION_CONTENT,
+         requests: HelpRequests | None = None) -> list[float]:
     evaluator = Evaluator(world.eval_env, world.goals, world.scale.diagonal)
     means: list[float] = []
 
@@ -177,15 +197,24 @@ def _run(learner: Learner, world: World, movements: int, eval_every: int,
     for i in range(movements):
         if eval_every > 0 and i % eval_every == 0:
             evaluate(i)
-        if teacher is not None and teacher.due(i):
+        demo, asked = None, None
+        if teacher is not None and requests is None and teacher.due(i):
             learner.on_teacher_turn()
             demo = teacher.choose(learner_progress(teacher_rule, learner.inverse,
                                                    learner.own_outcomes, teacher_env))
-            if demo is not None:
-                action, outcome = demo.shown(content)
-                learner.on_demonstration(action, outcome)
-                write({"type": "demonstration", "movement": i, "teaching_index": demo.index,
-                       "content": content, "action": _vec(action), "outcome": _vec(outcome)})
+        elif requests is not None and requests.should_ask():
+            asked = learner.last_attempt_goal
+            requests.asked()
+            write({"type": "help_request", "movement": i, "ask": requests.asks,
+                   "goal": _vec(asked)})
+            demo = teacher.answer(asked, learner_progress(teacher_rule, learner.inverse,
+                                                          learner.own_outcomes, teacher_env))
+        if demo is not None:
+            action, outcome = demo.shown(content)
+            learner.on_demonstration(action, outcome)
+            write({"type": "demonstration", "movement": i, "teaching_index": demo.index,
+                   "content": content, "action": _vec(action), "outcome": _vec(outcome),
+                   **({} if asked is None else {"asked_goal": _vec(asked)})})
         action, label = learner.next_action()
         result = world.env.execute(action)
         learner.observe(action, result)
@@ -240,6 +269,11 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                    help="what a demonstration shows the learner: the action and its outcome "
                         "(the paper), the outcome only (emulation) or the action only "
                         "(core/teaching.py; default: %(default)s)")
+    p.add_argument("--timing", choices=TIMINGS, default=DEFAULT_TIMING,
+                   help="when the teacher speaks: every --teacher-period movements (the "
+                        "paper), or when the learner asks, its competence progress stalled "
+                        "(core/help_request.py; as many asks at most as periodic turns; "
+                        "default: %(default)s)")
     p.add_argument("--teacher-tolerance-noise", type=float, default=DEFAULT_TOLERANCE_NOISE,
                    help="a teaching goal is reached within this many units of the world's "
                         "outcome noise (default: %(default)s)")
@@ -253,6 +287,9 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         p.error("--teacher-tolerance-noise must be >= 0")
     if args.pond_radius is not None and args.env != "fishing":
         p.error("--pond-radius needs --env fishing")
+    if args.learner == "demo-only" and args.timing == ON_REQUEST:
+        p.error("demo-only attempts no goals, so it never asks: --timing on-request needs "
+                "sgim-d")
     if args.learner == "demo-only" and args.demonstration_content == GOAL_ONLY:
         p.error("demo-only varies demonstrated actions: --demonstration-content goal-only "
                 "shows none")
@@ -276,11 +313,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     start = time.perf_counter()
     with args.output.open("w") as f, tqdm(total=args.movements, disable=args.quiet,
                                            desc=args.learner, file=sys.stderr) as bar:
-        shown = 0
+        counts = {"demonstration": 0, "help_request": 0}  # what the teacher showed, asks
 
         def write(record: dict[str, Any]) -> None:
-            nonlocal shown
-            shown += record["type"] == "demonstration"
+            if record["type"] in counts:
+                counts[record["type"]] += 1
             f.write(json.dumps(record) + "\n")
             f.flush()
 
@@ -294,20 +331,23 @@ def main(argv: Sequence[str] | None = None) -> int:
                          "noise": world.scale.noise},
                "teacher": {"period": args.teacher_period, "rule": args.teacher_rule,
                            "choice": args.teacher_choice,
-                           "content": args.demonstration_content,
+                           "content": args.demonstration_content, "timing": args.timing,
                            "tolerance_noise": args.teacher_tolerance_noise},
                "config": config.to_dict()})
         means = run(learner, world, args.movements, args.eval_every, args.seed, write,
                     args.teacher_period, args.teacher_tolerance_noise, progress=bar.update,
                     teacher_rule=args.teacher_rule, teacher_choice=args.teacher_choice,
-                    demonstration_content=args.demonstration_content)
-        demos = shown  # what the teacher showed (goal- or means-only ones are not stored)
-        turns = len(range(0, args.movements, args.teacher_period)) if learner.social else 0
+                    demonstration_content=args.demonstration_content, timing=args.timing)
+        demos = counts["demonstration"]  # goal- or means-only ones are not in memory
+        turns = ((counts["help_request"] if args.timing == ON_REQUEST else
+                  budget_for(args.movements, args.teacher_period))
+                 if learner.social else 0)
         write({"type": "end", "final_mean_distance": means[-1], "n_memory": len(learner.memory),
                "n_demonstrations": demos, "n_teacher_turns": turns,
                "n_failures": learner.n_failures, "elapsed_s": time.perf_counter() - start})
     if not args.quiet:
-        taught = (f"{demos} demonstrations in {turns} teacher turns ({args.teacher_rule} rule)"
+        taught = (f"{demos} demonstrations in {turns} teacher turns ({args.teacher_rule} rule, "
+                  f"{args.timing})"
                   if learner.social else "no teacher")
         print(f"{args.learner}: final mean distance {means[-1]:.4f}, {taught} "
               f"-> {args.output}", file=sys.stderr)

@@ -144,6 +144,17 @@ class Teacher:
         i = int(self.rng.choice(candidates))
         return Demonstration(i, self.actions[i].copy(), self.outcomes[i].copy())
 
+    def answer(self, goal: np.ndarray, reached: Reached) -> Demonstration | None:
+        """A learner asked for help with ``goal`` (help_request.py): the unreached teaching
+        entry whose outcome lies nearest it (ties at random), or None if every goal is
+        reached."""
+        candidates = self.unreached(reached)
+        if len(candidates) == 0:
+            return None
+        gap = np.linalg.norm(self.outcomes[candidates] - np.asarray(goal, dtype=float), axis=1)
+        i = int(self.rng.choice(candidates[gap == gap.min()]))
+        return Demonstration(i, self.actions[i].copy(), self.outcomes[i].copy())
+
 
 def check_choice(choice: str) -> str:
     if choice not in TEACHER_CHOICES:
