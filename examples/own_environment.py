@@ -5,7 +5,7 @@ The learner only needs an object with ``action_dim``, ``outcome_dim`` and
 or simulator behind those three names and the code below runs unchanged.
 
     pip install ./sgim_nodes                  # numpy and scipy; no ROS needed
-    python examples/own_environment.py        # about 20 s; --help for the options
+    python examples/own_environment.py        # a few seconds; --help for the options
 
 It prints the benchmark's mean error (the distance from each goal to where the hand lands
 when the learner aims at it) as the learner practises, and the number of demonstrations.
