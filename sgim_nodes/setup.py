@@ -1,4 +1,10 @@
-"""ament_python package of the learner's nodes and their ROS-free core."""
+"""ament_python package of the learner's nodes and their ROS-free core.
+
+colcon builds it into ros_ws as a ROS package; ``pip install ./sgim_nodes`` installs it into any
+Python >= 3.11 environment without ROS, for the core (``sgim_nodes.core``, README "Using the
+learner without ROS"). ``install_requires`` lists what the core and its runner import; the
+nodes' ROS dependencies are in package.xml, and colcon installs nothing from this list.
+"""
 
 from glob import glob
 
@@ -16,7 +22,9 @@ setup(
         (f"share/{PACKAGE}/config", glob("config/*.yaml")),
         (f"share/{PACKAGE}/launch", glob("launch/*.launch.py")),
     ],
-    install_requires=["setuptools"],
+    python_requires=">=3.11",
+    # setuptools: the ament_python template's; numpy, scipy: the core; tqdm: the runner's bar.
+    install_requires=["setuptools", "numpy", "scipy", "tqdm"],
     zip_safe=False,
     maintainer="SGIM-ROS maintainers",
     maintainer_email="maintainers@sgim-ros.org",
