@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from sgim_nodes.analysis import figures
+from sgim_nodes.analysis.export import write_csv
 from sgim_nodes.analysis.floor import FloorSummary, benchmark_floor
 from sgim_nodes.analysis.statistics import (
     ALPHA,
@@ -55,6 +56,7 @@ bags alone, and write:
                     pairwise tests (Fisher's exact test on the runs reaching it, Mann-Whitney U
                     on the share of own landings in it), runs and durations
   results.json      the same numbers
+  evaluations.csv   with --csv: one row per run and evaluation, every setting a column
 Each run is read once, every segment of it (bag/, bag.resume1/, ...), its records validated
 as every reader validates them; its columns are cached as <run>/{CACHE_NAME} (rebuilt when a
 segment changes). Damaged bags are reported and used as far as readable; unreadable runs are
@@ -82,6 +84,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--allow-repeated-seeds", action="store_true",
                         help="pool runs of one group that share a seed (by default the "
                              "analysis refuses: they are not independent samples)")
+    parser.add_argument("--csv", action="store_true",
+                        help="also write evaluations.csv: one row per run and evaluation, "
+                             "every setting of the run a column (for pandas and the like)")
     args = parser.parse_args(argv)
     if args.times is not None and any(t < 1 for t in args.times):
         parser.error("--times must be positive movement counts")
@@ -310,7 +315,10 @@ def run(args: argparse.Namespace) -> int:
         results_dict(study, curves, finals, tests, coverage, summaries, written, floor,
                      region_tests),
         indent=1), encoding="utf-8")
-    print(f"Wrote {', '.join([*written.values(), 'results.md', 'results.json'])} to {out}")
+    tables = ["results.md", "results.json"]
+    if args.csv:
+        tables.append(write_csv(study, out / "evaluations.csv").name)
+    print(f"Wrote {', '.join([*written.values(), *tables])} to {out}")
     if study.skipped:
         print(f"Skipped {len(study.skipped)} run(s): {', '.join(study.skipped)} "
               "(see results.md, Warnings)")
