@@ -24,30 +24,33 @@ def test_progress_and_its_standard_error_by_hand():
 
 
 def test_asks_when_flat_not_while_progressing_then_waits_a_new_window():
-    r = HelpRequests(budget=5, window=6)
+    r = HelpRequests(budget=5, period=10, window=6)
     for c in [-0.9, -0.7, -0.5, -0.3, -0.2, -0.1]:  # steady progress: no ask
         r.attempt_ended(c)
-    assert not r.stalled() and not r.should_ask()
+    assert not r.stalled() and not r.should_ask(100)
     for c in [-0.5, -0.6, -0.5, -0.6, -0.5, -0.6]:  # flat within its noise: stalled
         r.attempt_ended(c)
-    assert r.should_ask()
+    assert r.should_ask(100)
     r.asked()
-    assert r.asks == 1 and not r.should_ask()  # a fresh window first
+    assert r.asks == 1 and not r.should_ask(100)  # a fresh window first
     for c in [-0.5] * 5:
         r.attempt_ended(c)
-    assert not r.should_ask()
+    assert not r.should_ask(100)
     r.attempt_ended(-0.5)
-    assert r.should_ask()
+    assert r.should_ask(100)
 
 
-def test_never_more_asks_than_the_budget():
-    r = HelpRequests(budget=2, window=4)
-    for _ in range(5):
+def test_never_more_asks_than_earned_nor_than_the_budget():
+    r = HelpRequests(budget=3, period=10, window=4)
+    asked_at = []
+    for movement in range(0, 60, 2):  # stalled all along: asks as soon as each is earned
         for _ in range(4):
             r.attempt_ended(-1.0)
-        if r.should_ask():
+        if r.should_ask(movement):
             r.asked()
-    assert r.asks == 2
+            asked_at.append(movement)
+    assert asked_at == [0, 10, 20]  # one per period, then the budget is spent
+    assert [r.allowance(m) for m in (0, 9, 10, 25, 1000)] == [1, 1, 2, 3, 3]
     assert budget_for(5000, 150) == 34 and budget_for(300, 50) == 6
 
 
@@ -56,6 +59,8 @@ def test_bad_settings_refused():
         HelpRequests(budget=-1)
     with pytest.raises(ValueError):
         HelpRequests(budget=3, window=5)
+    with pytest.raises(ValueError):
+        HelpRequests(budget=3, period=0)
 
 
 def test_the_teacher_answers_with_the_unreached_entry_nearest_the_asked_goal():
@@ -77,6 +82,7 @@ def test_the_runner_teaches_only_when_asked_for_the_goal_asked_about():
     asks = [r for r in records if r["type"] == "help_request"]
     demos = [r for r in records if r["type"] == "demonstration"]
     assert 0 < len(asks) <= budget_for(movements, period)
+    assert all(a["ask"] <= a["movement"] // period + 1 for a in asks)  # never ahead of P
     # One demonstration per ask (every goal stays unreached), at the ask's movement, and for
     # the teaching entry nearest the goal asked about.
     assert [d["movement"] for d in demos] == [a["movement"] for a in asks]

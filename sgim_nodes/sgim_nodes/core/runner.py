@@ -172,7 +172,7 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
     try:
         requests = None
         if teacher is not None and timing == ON_REQUEST:
-            requests = HelpRequests(budget_for(movements, teacher_period))
+            requests = HelpRequests(budget_for(movements, teacher_period), teacher_period)
             learner.attempt_listeners.append(lambda _goal, c: requests.attempt_ended(c))
         return _run(learner, world, movements, eval_every, write, teacher, teacher_rule,
                     teacher_env, progress, demonstration_content, requests)
@@ -202,7 +202,7 @@ def _run(learner: Learner, world: World, movements: int, eval_every: int,
             learner.on_teacher_turn()
             demo = teacher.choose(learner_progress(teacher_rule, learner.inverse,
                                                    learner.own_outcomes, teacher_env))
-        elif requests is not None and requests.should_ask():
+        elif requests is not None and requests.should_ask(i):
             asked = learner.last_attempt_goal
             requests.asked()
             write({"type": "help_request", "movement": i, "ask": requests.asks,
