@@ -44,8 +44,10 @@ def test_cli_says_how_many_demonstrations_the_teacher_gave(tmp_path, capsys):
     assert len(demos) == records[-1]["n_demonstrations"] == 4  # tolerance 0: never reached
     assert records[-1]["n_teacher_turns"] == 4
     assert records[0]["teacher"] == {"period": 25, "rule": "own-movements",
-                                     "tolerance_noise": 0.0}
-    assert "4 demonstrations in 4 teacher turns (own-movements rule)" in capsys.readouterr().err
+                                     "choice": "random-unreached", "content": "means-and-goal",
+                                     "timing": "period", "tolerance_noise": 0.0}
+    assert "4 demonstrations in 4 teacher turns (own-movements rule, period)" in \
+        capsys.readouterr().err
     with pytest.raises(SystemExit):
         runner.main(["--teacher-rule", "lucky", "--output", str(out)])
 
