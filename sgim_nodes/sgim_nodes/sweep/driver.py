@@ -183,6 +183,7 @@ def _start_ray(args: argparse.Namespace) -> tuple[Any, str]:
         # The Ray started here takes a token of its own, in its processes' environment only
         # (read when ray is imported): nothing is read from or written to ~/.ray.
         os.environ.update(RAY_AUTH_MODE="token", RAY_AUTH_TOKEN=secrets.token_hex(32))
+    os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")  # nothing sent anywhere
     import ray
 
     common = {"log_to_driver": False, "logging_level": logging.WARNING}
