@@ -29,6 +29,7 @@ import os
 import platform
 import secrets
 import shlex
+import signal
 import subprocess
 import time
 from collections.abc import Sequence
@@ -455,6 +456,9 @@ def quarantine(run_dir: Path) -> dict[str, Any]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    # A parent may have blocked the stop signals (a Ray worker blocks SIGINT), and the mask
+    # passes through exec to every node: they would not hear their clean shutdown.
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM, signal.SIGHUP})
     supervise.watch_owner()
     return run(parse_args(argv))
 

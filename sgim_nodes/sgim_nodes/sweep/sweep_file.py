@@ -1,0 +1,329 @@
+"""The sweep file: settings in YAML, expanded into one ``RunSpec`` per run.
+
+    # sgim_nodes/config/sweeps/example.yaml
+    runs_dir: runs/example        # results directory (relative to the repository)
+    movements: 1000               # every setting at the top applies to every block below
+    seeds: 3                      # 0, 1, 2; or a list [0, 4]; or {first: 10, count: 5}
+    grid:                         # a list of blocks; each block is a cartesian product
+      - learner: [saggriac, demo-only]
+      - learner: sgim-d
+        period: [50, 150, 500]    # the paper's P -> run_experiment --period
+        param:                    # anything else -> run_experiment --param NAME=VALUE
+          imitation_count: [3, 5]
+
+A list is swept; to pass a list as one value, wrap it: ``[[1, 2]]``. Every parameter value, and
+every combination of them, is checked as run_experiment checks it (graph/description.py), so a
+misspelt name or a bad value stops the sweep before any run starts. A run of a learner without
+a teacher (saggriac, random-goals, random) ignores ``period`` and ``teacher``, so those runs are
+made once, not once per P. Runs are named ``<learner>[-P<p>][-<name>=<value>...]-seed<N>``
+from the settings that differ from run_experiment's and learner.yaml's defaults, so the
+paper's default runs keep ``run_study.sh``'s names (``sgim-d-seed3``) and a sweep file can
+grow new blocks without renaming the runs already done.
+"""
+
+from __future__ import annotations
+
+import itertools
+import re
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from sgim_nodes.core.learners import LEARNER_NAMES
+from sgim_nodes.graph import experiment
+from sgim_nodes.graph.description import (
+    ARBITER_TEACHER,
+    OPTION_PARAMETERS,
+    SOCIAL,
+    STORAGES,
+    check,
+    learner_defaults,
+)
+from sgim_nodes.graph.experiment import REPO
+from sgim_ros.params import ParameterError
+
+# Settings of one run: the file's keys (param: -> run_experiment --param NAME=VALUE).
+SETTINGS = ("learner", "period", "movements", "eval_every", "teacher", "storage", "seeds",
+            "param")
+TOP_ONLY = ("name", "runs_dir", "run_timeout", "grid")
+TEACHERS = ("automatic", "external")  # human and web need a person: not in a sweep
+# The parameters run_experiment sets from its options, and the sweep setting that sets them.
+SETTING_OF_PARAM = {"learner": "learner", "seed": "seeds", "movements": "movements",
+                    "eval_every": "eval_every", "demonstration_period": "period",
+                    "teacher": "teacher", "storage": "storage"}
+# run_experiment's own defaults.
+DEFAULTS = {key: experiment.DEFAULTS[key]
+            for key in ("period", "movements", "eval_every", "teacher", "storage")}
+_UNSAFE = re.compile(r"[^A-Za-z0-9._+=,-]+")
+
+
+class SweepFileError(ValueError):
+    """A sweep file that cannot be expanded; the message names the file and the key."""
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One run of a sweep: what run_experiment is told, and the folder it lands in."""
+
+    learner: str
+    seed: int
+    movements: int
+    eval_every: int
+    period: int | None  # None: a learner without a teacher
+    teacher: str | None
+    storage: str
+    params: tuple[tuple[str, str], ...] = ()  # (name, YAML text), sorted by name
+    name: str = field(default="", compare=False)
+
+    @property
+    def social(self) -> bool:
+        return self.learner in SOCIAL
+
+    def argv(self) -> list[str]:
+        """run_experiment's arguments (without --runs-dir, --name and the launcher's own)."""
+        args = [self.learner, "--seed", str(self.seed), "--movements", str(self.movements),
+                "--eval-every", str(self.eval_every), "--storage", self.storage]
+        if self.social:
+            args += ["--period", str(self.period), "--teacher", str(self.teacher)]
+        for name, text in self.params:
+            args += ["--param", f"{name}={text}"]
+        return args
+
+    def settings(self) -> dict[str, Any]:
+        """Every setting as a plain mapping (for status files and the run's sweep record)."""
+        out: dict[str, Any] = {"learner": self.learner, "seed": self.seed,
+                               "movements": self.movements, "eval_every": self.eval_every,
+                               "storage": self.storage}
+        if self.social:
+            out.update(period=self.period, teacher=self.teacher)
+        out["param"] = {name: yaml.safe_load(text) for name, text in self.params}
+        return out
+
+    def expected_parameters(self) -> dict[str, Any]:
+        """What a run folder's metadata must say for it to be this run."""
+        expected: dict[str, Any] = {"learner": self.learner, "seed": self.seed,
+                                    "movements": self.movements, "eval_every": self.eval_every,
+                                    "storage": self.storage}
+        if self.social:
+            expected["demonstration_period"] = self.period
+            expected["teacher"] = ARBITER_TEACHER[str(self.teacher)]
+        else:
+            expected["teacher"] = "none"
+        expected.update(checked_params(self.params))
+        return expected
+
+
+@dataclass(frozen=True)
+class Sweep:
+    path: Path
+    name: str
+    runs_dir: Path
+    run_timeout: float | None
+    runs: tuple[RunSpec, ...]
+
+
+def checked_params(params: Iterable[tuple[str, str]]) -> dict[str, Any]:
+    """The values as the nodes read them (and metadata.yaml records them): 1 -> 1.0 for a
+    float parameter; ParameterError for an unknown name or a bad value."""
+    return check({name: yaml.safe_load(text) for name, text in params})
+
+
+@cache
+def checked_defaults() -> dict[str, Any]:
+    """Every parameter of learner.yaml at its default, as the nodes read it."""
+    return check(learner_defaults())
+
+
+def yaml_text(value: Any, where: str) -> str:
+    """The value as one line of YAML that reads back as the same value."""
+    if isinstance(value, Mapping):
+        raise SweepFileError(f"{where}: a parameter value cannot be a mapping ({value!r})")
+    text = yaml.safe_dump(value, default_flow_style=True, width=10**6).strip()
+    text = text.removesuffix("...").strip()
+    if yaml.safe_load(text) != value or "\n" in text:
+        raise SweepFileError(f"{where}: {value!r} cannot be passed as one --param value")
+    return text
+
+
+def _tag(name: str, text: str) -> str:
+    value = yaml.safe_load(text)
+    shown = ",".join(map(str, value)) if isinstance(value, list) else str(value)
+    return _UNSAFE.sub("_", f"{name}={shown}")
+
+
+def run_name(spec: RunSpec) -> str:
+    """<learner>[-P<p>][-teacher=<t>][-<name>=<value>...]-seed<N>: the non-default settings
+    (a spec's params hold only values that differ from learner.yaml's)."""
+    tags = []
+    if spec.social and spec.period != DEFAULTS["period"]:
+        tags.append(f"P{spec.period}")
+    if spec.social and spec.teacher != DEFAULTS["teacher"]:
+        tags.append(f"teacher={spec.teacher}")
+    tags += [_tag(name, text) for name, text in spec.params]
+    return "-".join([spec.learner, *tags, f"seed{spec.seed}"])
+
+
+def _as_list(value: Any) -> list[Any]:
+    return list(value) if isinstance(value, list) else [value]
+
+
+def _seeds(value: Any, where: str) -> list[int]:
+    if isinstance(value, bool):
+        raise SweepFileError(f"{where}: seeds must be a count, a list or {{first, count}}")
+    if isinstance(value, int):
+        seeds = list(range(value))
+    elif isinstance(value, list):
+        seeds = value
+    elif isinstance(value, Mapping) and set(value) <= {"first", "count"} and "count" in value:
+        first, count = value.get("first", 0), value["count"]
+        if not all(isinstance(v, int) and not isinstance(v, bool) for v in (first, count)):
+            raise SweepFileError(f"{where}: seeds' first and count must be integers")
+        seeds = list(range(first, first + count))
+    else:
+        raise SweepFileError(f"{where}: seeds must be a count (N: 0..N-1), a list of seeds or "
+                             f"{{first: F, count: N}}, got {value!r}")
+    if not seeds or any(not isinstance(s, int) or isinstance(s, bool) or s < 0 for s in seeds):
+        raise SweepFileError(f"{where}: seeds must be integers >= 0, at least one, got {value!r}")
+    return seeds
+
+
+def _positive_int(value: Any, key: str, where: str, minimum: int = 1) -> int:
+    if not isinstance(value, int) or isinstance(value, bool) or value < minimum:
+        raise SweepFileError(f"{where}: {key} must be an integer >= {minimum}, got {value!r}")
+    return value
+
+
+def _check_block(block: Any, where: str) -> dict[str, Any]:
+    if not isinstance(block, Mapping):
+        raise SweepFileError(f"{where}: expected a mapping of settings, got {block!r}")
+    unknown = sorted(map(str, set(block) - set(SETTINGS)))
+    if unknown:
+        top_only = [k for k in unknown if k in TOP_ONLY]
+        if top_only:
+            raise SweepFileError(f"{where}: {', '.join(top_only)} belongs at the top of the file")
+        raise SweepFileError(f"{where}: unknown setting(s) {', '.join(unknown)}; the settings "
+                             f"are {', '.join(SETTINGS)}, and every node parameter goes under "
+                             "'param:' (e.g. param: {imitation_count: [3, 5]})")
+    param = block.get("param", {})
+    if not isinstance(param, Mapping):
+        raise SweepFileError(f"{where}: 'param' must map parameter names to values")
+    for name in param:
+        if not isinstance(name, str) or not name:
+            raise SweepFileError(f"{where}: parameter names must be strings, got {name!r}")
+        if name in OPTION_PARAMETERS:
+            key = SETTING_OF_PARAM.get(name)
+            instead = (f"use the setting '{key}'" if key else
+                       f"run_experiment sets it ({OPTION_PARAMETERS[name]})")
+            raise SweepFileError(f"{where}: param {name} is not a parameter to sweep: "
+                                 f"{instead}")
+    return dict(block)
+
+
+def _expand_block(block: dict[str, Any], where: str) -> Iterable[RunSpec]:
+    if "learner" not in block:
+        raise SweepFileError(f"{where}: no learner (give 'learner' at the top or in the block)")
+    learners = _as_list(block["learner"])
+    for learner in learners:
+        if learner not in LEARNER_NAMES:
+            raise SweepFileError(f"{where}: unknown learner {learner!r}; choose among "
+                                 f"{', '.join(LEARNER_NAMES)}")
+    seeds = _seeds(block.get("seeds", 1), where)
+    axes = {key: _as_list(block.get(key, DEFAULTS[key])) for key in DEFAULTS}
+    for value in axes["period"]:
+        _positive_int(value, "period", where)
+    for value in axes["movements"]:
+        _positive_int(value, "movements", where)
+    for value in axes["eval_every"]:
+        _positive_int(value, "eval_every", where, minimum=0)
+    for value in axes["teacher"]:
+        if value not in TEACHERS:
+            raise SweepFileError(f"{where}: teacher must be one of {', '.join(TEACHERS)} (the "
+                                 f"human and web teachers need a person), got {value!r}")
+    for value in axes["storage"]:
+        if value not in STORAGES:
+            raise SweepFileError(f"{where}: storage must be one of {', '.join(STORAGES)}")
+    params = block.get("param", {})
+    names = sorted(params)
+    values = [[yaml_text(v, f"{where}: param {n}") for v in _as_list(params[n])] for n in names]
+    for name, texts in zip(names, values, strict=True):
+        for text in texts:  # every value checked as run_experiment would, before any run
+            try:
+                checked_params([(name, text)])
+            except ParameterError as error:
+                raise SweepFileError(f"{where}: {error}") from None
+    defaults = checked_defaults()
+    for chosen in itertools.product(*values):  # values that must agree (p_mode1..3, ...)
+        try:
+            checked_params(zip(names, chosen, strict=True))
+        except ParameterError as error:
+            raise SweepFileError(f"{where}: {error}") from None
+    for seed, learner, movements, eval_every, storage, period, teacher, chosen in (
+            itertools.product(seeds, learners, axes["movements"], axes["eval_every"],
+                              axes["storage"], axes["period"], axes["teacher"],
+                              itertools.product(*values))):
+        social = learner in SOCIAL
+        # A parameter at its learner.yaml default is the default run: one spec, one name.
+        given = tuple((n, t) for n, t in zip(names, chosen, strict=True)
+                      if n not in defaults or checked_params([(n, t)])[n] != defaults[n])
+        spec = RunSpec(learner, seed, movements, eval_every, period if social else None,
+                       teacher if social else None, storage, given)
+        yield RunSpec(**{**spec.__dict__, "name": run_name(spec)})
+
+
+def expand(document: Mapping[str, Any], where: str = "sweep file") -> list[RunSpec]:
+    """Every run of the document, seed-major (a sweep cut short has every setting at its
+    first seeds), each once."""
+    if not isinstance(document, Mapping):
+        raise SweepFileError(f"{where}: expected a mapping at the top, "
+                             f"got {type(document).__name__}")
+    top = _check_block({k: v for k, v in document.items() if k not in TOP_ONLY}, where)
+    grid = document.get("grid", [{}])
+    if not isinstance(grid, list) or not grid:
+        raise SweepFileError(f"{where}: 'grid' must be a non-empty list of blocks")
+    found: dict[str, RunSpec] = {}
+    order: list[tuple[int, int, str]] = []
+    for b, block in enumerate(grid):
+        here = f"{where}, grid block {b + 1}"
+        block = _check_block(block, here)
+        merged = {**top, **block, "param": {**top.get("param", {}), **block.get("param", {})}}
+        for spec in _expand_block(merged, here):
+            if spec.name in found:
+                if found[spec.name] != spec:
+                    raise SweepFileError(
+                        f"{here}: two different runs would share the folder {spec.name} "
+                        f"({_difference(found[spec.name], spec)}): movements, eval_every and "
+                        "storage are not part of run names, so sweep them in separate sweeps")
+                continue
+            found[spec.name] = spec
+            order.append((spec.seed, len(order), spec.name))
+    return [found[name] for _, _, name in sorted(order)]
+
+
+def _difference(a: RunSpec, b: RunSpec) -> str:
+    sa, sb = a.settings(), b.settings()
+    return ", ".join(f"{k}: {sa.get(k)!r} vs {sb.get(k)!r}" for k in sorted(set(sa) | set(sb))
+                     if sa.get(k) != sb.get(k))
+
+
+def load(path: str | Path, runs_dir: Path | None = None) -> Sweep:
+    """Read and expand a sweep file; `runs_dir` (the command line's) wins over the file's."""
+    path = Path(path)
+    try:
+        document = yaml.safe_load(path.read_text())
+    except OSError as error:
+        raise SweepFileError(f"cannot read the sweep file {path}: {error.strerror}") from None
+    except yaml.YAMLError as error:
+        raise SweepFileError(f"{path}: not valid YAML: {error}") from None
+    runs = expand(document, str(path))
+    name = str(document.get("name", path.stem))
+    if runs_dir is None:
+        runs_dir = REPO / str(document.get("runs_dir", f"runs/{path.stem}"))
+    timeout = document.get("run_timeout")
+    if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, int | float)
+                                or timeout <= 0):
+        raise SweepFileError(f"{path}: run_timeout must be a number of seconds > 0")
+    return Sweep(path, name, Path(runs_dir).absolute(), timeout, tuple(runs))
