@@ -82,7 +82,7 @@ def vec(values: Sequence[float]) -> np.ndarray:
 
 
 def floats(array: np.ndarray | Sequence[float] | None) -> list[float]:
-    return [] if array is None else [float(v) for v in np.asarray(array, dtype=float).ravel()]
+    return [] if array is None else np.asarray(array, dtype=float).ravel().tolist()
 
 
 def check_vector(values: Sequence[float], size: int, what: str, bound: float = 1.0) -> str:
