@@ -43,12 +43,14 @@ def node_cpu(pid: int) -> tuple[str, float] | None:
 
 class CpuSampler(threading.Thread):
     """The largest CPU time seen for each node process of the run, until stopped: a process's
-    CPU time only grows, and the last sample before it exits is close to its total."""
+    CPU time only grows, and the last sample before it exits is close to its total. The
+    samples are also kept in time (wall clock), to tell the steady state from start-up."""
 
     def __init__(self, run_dir: Path, period: float = 0.5) -> None:
         super().__init__(daemon=True)
         self.run_dir, self.period = run_dir, period
         self.seen: dict[int, tuple[str, float]] = {}
+        self.series: list[tuple[float, dict[int, tuple[str, float]]]] = []
         self.stopping = threading.Event()
 
     def run(self) -> None:
@@ -59,6 +61,19 @@ class CpuSampler(threading.Thread):
                 sample = node_cpu(pid)
                 if sample is not None:
                     self.seen[pid] = sample
+            self.series.append((time.time(), dict(self.seen)))
+
+    def between(self, start: float, end: float) -> dict[str, float]:
+        """CPU seconds each node used between two wall-clock times (the samples nearest
+        inside them)."""
+        inside = [(t, seen) for t, seen in self.series if start <= t <= end]
+        if len(inside) < 2:
+            return {}
+        (_, first), (_, last) = inside[0], inside[-1]
+        out: dict[str, float] = {}
+        for pid, (name, cpu) in last.items():
+            out[name] = out.get(name, 0.0) + cpu - first.get(pid, (name, 0.0))[1]
+        return dict(sorted(out.items(), key=lambda kv: -kv[1]))
 
     def per_node(self) -> dict[str, float]:
         out: dict[str, float] = {}
@@ -78,15 +93,19 @@ def main() -> int:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--movements", type=int, default=5000)
     p.add_argument("--eval-every", type=int, default=250)
+    p.add_argument("--graph-only", action="store_true",
+                   help="skip the runner: the graph's time and CPU only (to compare changes)")
     args = p.parse_args()
     out = Path(tempfile.mkdtemp(prefix="bench-graph-"))
     common = ["--seed", str(args.seed), "--movements", str(args.movements), "--eval-every",
               str(args.eval_every)]
 
     start, cpu = time.perf_counter(), children_cpu()
-    subprocess.run([sys.executable, "-m", "sgim_nodes.core.runner", "--learner", args.learner,
-                    "--env", "fishing", "--output", str(out / "runner.jsonl"), "--quiet",
-                    *common], check=True)
+    if not args.graph_only:
+        subprocess.run([sys.executable, "-m", "sgim_nodes.core.runner", "--learner",
+                        args.learner,
+                        "--env", "fishing", "--output", str(out / "runner.jsonl"), "--quiet",
+                        *common], check=True)
     runner_s, runner_cpu = time.perf_counter() - start, children_cpu() - cpu
 
     sampler = CpuSampler(out / "graph")
@@ -101,24 +120,44 @@ def main() -> int:
     from sgim_nodes.bag.reader import load_run
 
     run = load_run(out / "graph" / "bag")
-    records = [json.loads(line) for line in (out / "runner.jsonl").read_text().splitlines()]
-    moves = [r for r in records if r["type"] == "movement"]
-    same = len(moves) == len(run.movements) and all(
-        np.array_equal(m.action, np.asarray(r["action"]))
-        for m, r in zip(run.movements, moves, strict=True))
     print(f"learner {args.learner}, seed {args.seed}, {args.movements} movements, "
           f"evaluation every {args.eval_every}")
-    print(f"single-process runner: {runner_s:7.1f} s")
+    if not args.graph_only:
+        records = [json.loads(line)
+                   for line in (out / "runner.jsonl").read_text().splitlines()]
+        moves = [r for r in records if r["type"] == "movement"]
+        same = len(moves) == len(run.movements) and all(
+            np.array_equal(m.action, np.asarray(r["action"]))
+            for m, r in zip(run.movements, moves, strict=True))
+        print(f"single-process runner: {runner_s:7.1f} s")
     print(f"node graph, recorded:  {graph_s:7.1f} s (start-up and shutdown included)")
-    print(f"ratio graph / runner:  {graph_s / runner_s:7.2f}  (target <= 1.1)")
-    print(f"same movements:        {same}")
+    if not args.graph_only:
+        print(f"ratio graph / runner:  {graph_s / runner_s:7.2f}  (target <= 1.1)")
+        print(f"same movements:        {same}")
     per_node = sampler.per_node()
     n = max(args.movements, 1)
-    print(f"CPU: runner {runner_cpu:.1f} s ({1000 * runner_cpu / n:.1f} ms per movement); "
-          f"graph nodes {sum(per_node.values()):.1f} s "
+    runner = (f"runner {runner_cpu:.1f} s ({1000 * runner_cpu / n:.1f} ms per movement); "
+              if not args.graph_only else "")
+    print(f"CPU: {runner}graph nodes {sum(per_node.values()):.1f} s "
           f"({1000 * sum(per_node.values()) / n:.1f} ms per movement):")
     for name, cpu in per_node.items():
         print(f"  {name:20s} {cpu:7.1f} s  {1000 * cpu / n:6.2f} ms per movement")
+    # The steady state: from the movement at 10 % of the run to the one at 90 %, without the
+    # nodes' start-up (imports, discovery) and shutdown.
+    stamps = [m.stamp_ns * 1e-9 for m in run.movements]
+    if len(stamps) >= 20:
+        a, b = len(stamps) // 10, len(stamps) * 9 // 10
+        window = sampler.between(stamps[a], stamps[b])
+        inside = [t for t, _ in sampler.series if stamps[a] <= t <= stamps[b]]
+        if window and len(inside) >= 2:
+            moved = sum(1 for s in stamps if inside[0] <= s <= inside[-1])
+            span = inside[-1] - inside[0]
+            print(f"steady state (movements {a + 1}-{b + 1}): {moved} movements in "
+                  f"{span:.1f} s, {1000 * span / max(moved, 1):.1f} ms per movement; graph "
+                  f"nodes {1000 * sum(window.values()) / max(moved, 1):.1f} ms CPU per "
+                  "movement:")
+            for name, cpu in window.items():
+                print(f"  {name:20s} {1000 * cpu / max(moved, 1):6.2f} ms per movement")
     print(f"outputs in {out}")
     return 0
 

@@ -106,7 +106,7 @@ class SimBridgeNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    return run_node(SimBridgeNode, args)
+    return run_node(SimBridgeNode, args, executor="events")
 
 
 if __name__ == "__main__":

@@ -189,7 +189,7 @@ class TeacherNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    return run_node(TeacherNode, args)
+    return run_node(TeacherNode, args, executor="events")
 
 
 if __name__ == "__main__":

@@ -256,7 +256,9 @@ def check_region_map(r: Any, limits: Limits) -> Problem | None:
                    or vector_problem(region.upper, limits.outcome_size, f"region {rid} upper"))
         if problem:
             return problem
-        if np.any(_values(region.lower) > _values(region.upper)):
+        # Both are finite vectors of the outcome size now: plain Python compares them faster
+        # than numpy, and a map of hundreds of regions is checked at every attempted goal.
+        if any(low > high for low, high in zip(region.lower, region.upper, strict=True)):
             return Problem("bad-value", f"region {rid}: lower corner above upper corner")
         if not math.isfinite(float(region.interest)):
             return Problem("non-finite", f"region {rid}: interest is {float(region.interest)}")

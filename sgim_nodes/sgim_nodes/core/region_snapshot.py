@@ -87,30 +87,38 @@ def snapshot(tree: RegionTree, ids: RegionIds, goal_count: int) -> RegionSnapsho
     """Inner regions breadth-first (root first), then the leaves in tree.leaves order, which is
     the order GoalSelector indexes them by; every parent comes before its children."""
     parents: dict[int, int] = {id(tree.root): -1}
+    counts: dict[int, int] = {}
+    _count_goals(tree.root, counts)
     inner: list[RegionSummary] = []
     queue = [tree.root]
     while queue:
         region = queue.pop(0)
         if region.children is None:
             continue
-        inner.append(_summary(region, ids, parents[id(region)], tree))
+        inner.append(_summary(region, ids, parents[id(region)], tree, counts))
         for child in region.children:
             parents[id(child)] = ids(region)
             queue.append(child)
-    leaves = [_summary(leaf, ids, parents[id(leaf)], tree) for leaf in tree.leaves]
+    leaves = [_summary(leaf, ids, parents[id(leaf)], tree, counts) for leaf in tree.leaves]
     return RegionSnapshot(inner + leaves, goal_count, len(inner))
 
 
-def _summary(region: Region, ids: RegionIds, parent: int, tree: RegionTree) -> RegionSummary:
+def _summary(region: Region, ids: RegionIds, parent: int, tree: RegionTree,
+             counts: dict[int, int]) -> RegionSummary:
     least = None
     if region.goals:
         least = np.array(region.goals[int(np.argmin(region.competences))], dtype=float)
     interest = region.interest(tree.zeta, tree.noise_correction) if region.is_leaf else 0.0
     return RegionSummary(ids(region), parent, region.low.copy(), region.high.copy(), interest,
-                         _goal_count(region), region.is_leaf, least)
+                         counts[id(region)], region.is_leaf, least)
 
 
-def _goal_count(region: Region) -> int:
+def _count_goals(region: Region, counts: dict[int, int]) -> int:
+    """Goals held under each region (by id()), in one pass over the tree: a snapshot is
+    taken at every attempted goal."""
     if region.children is None:
-        return len(region.goals)
-    return sum(_goal_count(child) for child in region.children)
+        n = len(region.goals)
+    else:
+        n = sum(_count_goals(child, counts) for child in region.children)
+    counts[id(region)] = n
+    return n

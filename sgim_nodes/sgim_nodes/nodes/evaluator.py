@@ -149,7 +149,7 @@ class EvaluatorNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    return run_node(EvaluatorNode, args)
+    return run_node(EvaluatorNode, args, executor="events")
 
 
 if __name__ == "__main__":

@@ -65,7 +65,7 @@ class InterestComputer(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    return run_node(InterestComputer, args)
+    return run_node(InterestComputer, args, executor="events")
 
 
 if __name__ == "__main__":

@@ -91,7 +91,7 @@ class MarkersNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    return run_node(MarkersNode, args)
+    return run_node(MarkersNode, args, executor="events")
 
 
 if __name__ == "__main__":

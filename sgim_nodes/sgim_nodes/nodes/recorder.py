@@ -331,7 +331,8 @@ def main(args: list[str] | None = None) -> int:
                                                 if "--ros-args" in argv else None]):
         print(_usage())
         return 0
-    return run_node(RecorderNode, args, refusals=(BagWriteError, OSError))
+    return run_node(RecorderNode, args, refusals=(BagWriteError, OSError),
+                    executor="events")
 
 
 if __name__ == "__main__":

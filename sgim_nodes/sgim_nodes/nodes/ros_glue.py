@@ -26,13 +26,17 @@ from sim_bridge.scaling import OUTCOME_NOISE
 
 ACTION_SIZE = 24  # the fishing world's; a parameter of every node that checks sizes
 OUTCOME_SIZE = 2
-JOB_RESULT_SECONDS = 5
+JOB_RESULT_SECONDS = 1
 """How long a job server keeps a finished job's result (rclpy's default is 900 s). Every job's
 status stays in the action's status array for that long, and the array is republished, and
 deserialised by the arbiter, at every job's change of state: with 900 s a 5000-movement run
 carried thousands of finished jobs in each message, and the arbiter spent most of its CPU
-reading them (measured with py-spy; the graph took 3.6 times the runner's time). The arbiter
-asks for a job's result as soon as the job is accepted, so 5 s is ample."""
+reading them (measured with py-spy; the graph took 3.6 times the runner's time). A goal
+attempt takes about 1.6 movements, so even 5 s kept 60 to 150 jobs in every array (the
+arbiter's CPU per movement fell by a fifth from 5 s to 1 s, bench_graph_vs_runner.py). The
+arbiter asks for a job's result as soon as the job is accepted, before the job can end; a
+result asked too late would come back with an unknown status, which the arbiter refuses
+loudly (never a movement count gone astray)."""
 
 
 class JobServer:
@@ -78,7 +82,7 @@ def vec(values: Sequence[float]) -> np.ndarray:
 
 
 def floats(array: np.ndarray | Sequence[float] | None) -> list[float]:
-    return [] if array is None else [float(v) for v in np.asarray(array, dtype=float).ravel()]
+    return [] if array is None else np.asarray(array, dtype=float).ravel().tolist()
 
 
 def check_vector(values: Sequence[float], size: int, what: str, bound: float = 1.0) -> str:

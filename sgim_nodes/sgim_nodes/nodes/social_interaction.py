@@ -441,6 +441,10 @@ class SocialInteraction(AsyncNode):
         if response.status == GoalStatus.STATUS_ABORTED:
             raise RunAborted(f"the '{name}' job was aborted by its node at movement "
                              f"{self.count}: its log says why")
+        if response.status not in (GoalStatus.STATUS_SUCCEEDED, GoalStatus.STATUS_CANCELED):
+            # e.g. unknown: the server no longer knew the job (ros_glue.JOB_RESULT_SECONDS)
+            raise RunAborted(f"the '{name}' job at movement {self.count} ended with status "
+                             f"{response.status}, without a result: its movements are unknown")
         result = response.result
         self.count += result.movements_used
         return result
