@@ -37,3 +37,11 @@ def test_a_goal_memory_already_reaches_is_judged_on_the_tolerance():
 def test_start_distance_without_memory_is_the_distance_to_the_centre():
     assert start_distance(0.3, G, np.zeros(2)) == 0.3
     assert start_distance(float("inf"), G, np.zeros(2)) == pytest.approx(0.5)
+
+
+def test_a_floor_keeps_a_noise_sized_miss_from_counting_as_total_failure():
+    # memory 0.01 away: 0.075 is 0.025 beyond the tolerance, over a floor of 0.2 (not 0.05)
+    assert competence(G, _at(0.075), 0.01, TOL, floor=0.2) == pytest.approx(-0.125)
+    # a far goal is untouched by the floor: no gain on memory is still exactly -1
+    assert competence(G, _at(0.5), 0.5, TOL, floor=0.2) == -1.0
+    assert competence(G, _at(0.25), 0.45, TOL, floor=0.2) == pytest.approx(-0.5)

@@ -82,3 +82,33 @@ def test_tree_splits_only_when_over_the_maximum():
     # chronological order kept inside each child: left's interest is 0.4
     assert left.interest(4) == pytest.approx(0.4)
     assert tree.interests() == pytest.approx([0.4, 0.0])
+
+
+# Ten goals on a line, in chronological order. The cut leaving the 2 rightmost goals alone has
+# the largest interest gap (right [0, -1]: 0.25; left's last 4 [0, -1, -0.5, -0.5]: 0); the
+# middle cut a smaller one (left's last 4 [-0.5, 0, -1, 0]: 0.125; right's: 0).
+LINE = np.column_stack([np.linspace(-0.9, 0.9, 10), np.zeros(10)])
+LINE_COMPS = np.array([-0.5, -0.5, 0.0, -1.0, 0.0, -1.0, -0.5, -0.5, 0.0, -1.0])
+
+
+def test_gap_split_takes_the_lopsided_cut():
+    choice = best_split(LINE, LINE_COMPS, np.array([-1.0, -1.0]), np.array([1.0, 1.0]),
+                        zeta=4, min_per_child=2, min_width=0.0, quality="gap")
+    assert choice is not None
+    assert (choice.n_left, choice.n_right) == (8, 2)
+    assert choice.score == pytest.approx(0.25)
+
+
+def test_balanced_split_weighs_the_gap_by_the_children_sizes():
+    # Baranes & Oudeyer's quality: 5 * 5 * sqrt(0.125) = 8.84 beats 8 * 2 * sqrt(0.25) = 8.
+    choice = best_split(LINE, LINE_COMPS, np.array([-1.0, -1.0]), np.array([1.0, 1.0]),
+                        zeta=4, min_per_child=2, min_width=0.0, quality="balanced")
+    assert choice is not None
+    assert (choice.n_left, choice.n_right) == (5, 5)
+    assert choice.value == pytest.approx(0.0)
+    assert choice.score == pytest.approx(25 * np.sqrt(0.125))
+
+
+def test_tree_refuses_an_unknown_split_quality():
+    with pytest.raises(ValueError, match="split"):
+        RegionTree(np.full(2, -1.0), np.full(2, 1.0), max_goals=8, zeta=4, split="widest")

@@ -30,15 +30,18 @@ import numpy as np
 
 
 def competence(goal: np.ndarray, best_outcome: np.ndarray | None, start_distance: float,
-               success_tolerance: float) -> float:
-    """In [-1, 0]; -1 when nothing was reached (every movement failed)."""
+               success_tolerance: float, floor: float | None = None) -> float:
+    """In [-1, 0]; -1 when nothing was reached (every movement failed). ``floor`` (default:
+    the tolerance) is the smallest reference distance: where memory already lands within the
+    noise of the goal, a miss by a noise unit must not count as total failure."""
     if best_outcome is None:
         return -1.0
     d = float(np.linalg.norm(np.asarray(best_outcome, float) - np.asarray(goal, float)))
     excess = max(0.0, d - success_tolerance)
     if excess == 0.0:
         return 0.0
-    base = max(start_distance - success_tolerance, success_tolerance)
+    base = max(start_distance - success_tolerance,
+               success_tolerance if floor is None else floor)
     if not math.isfinite(base) or base <= 0.0:
         return -1.0
     return -min(1.0, excess / base)

@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
+from .region_tree import SPLIT_QUALITIES
 from .scale import WorldScale
 
 INVERSE_MODELS = ("nearest", "reliable", "local-linear")
@@ -30,6 +31,7 @@ class Distances:
 
     success_tolerance: float
     competence_radius: float
+    competence_floor: float
     reach_threshold: float
     mode3_radius: float
     min_region_width: float
@@ -53,6 +55,11 @@ class LearnerConfig:
     units: every goal farther than that from anything reachable has the constant -1)."""
     competence_radius_noise: float = 4.0
     """The fixed reference distance of ``competence_reference: fixed``, in noise units."""
+    competence_floor_noise: float = 1.0
+    """Smallest reference distance of ``competence_reference: memory`` (competence.py), in
+    noise units: the competence divides an attempt's miss beyond the tolerance by memory's
+    distance beyond it, and where memory already lands near the goal this floor keeps a
+    noise-sized miss from counting as a total failure."""
 
     # --- region tree (paper eq. 2) ---
     max_goals_per_region: int = 50
@@ -70,6 +77,10 @@ class LearnerConfig:
     the default: with competence against memory, unreachable and mastered goals already have
     constant competences, and on the fishing world the paper's formula kept mode-1 goals off
     the land (docs/learners.md); 1 spread goals more evenly on the arms."""
+    region_split: str = "gap"
+    """How a full region chooses its cut (region_tree.split_quality): ``gap`` maximises the
+    children's interest difference alone; ``balanced`` maximises card(left) * card(right) *
+    sqrt(difference), Baranes & Oudeyer's split quality (2013; R-IAC 2009)."""
     min_region_width_size: float = 0.025
     """A dimension narrower than this fraction of the outcome box is not cut; stops endless
     splitting when mode 3 piles goals onto one point.  Chosen: 0.05 on [-1, 1]."""
@@ -190,7 +201,7 @@ class LearnerConfig:
         for name in ("mode3_radius_noise", "reach_threshold_noise", "nm_initial_step",
                      "local_radius_action", "local_step_fraction",
                      "failure_cost_size", "imitation_epsilon", "memory_rebuild_fraction",
-                     "explore_distance_size", "trust_radius_action"):
+                     "explore_distance_size", "trust_radius_action", "competence_floor_noise"):
             if not getattr(self, name) > 0.0:
                 fail(name, "must be > 0")
         for name in ("alpha", "explore_gain", "min_region_width_size", "explore_action",
@@ -205,6 +216,8 @@ class LearnerConfig:
             fail("inverse_model", f"must be one of {', '.join(INVERSE_MODELS)}")
         if self.competence_reference not in ("memory", "fixed"):
             fail("competence_reference", "must be memory or fixed")
+        if self.region_split not in SPLIT_QUALITIES:
+            fail("region_split", f"must be one of {', '.join(SPLIT_QUALITIES)}")
         if self.optimiser not in OPTIMISERS:
             fail("optimiser", f"must be one of {', '.join(OPTIMISERS)}")
 
@@ -213,6 +226,7 @@ class LearnerConfig:
         return Distances(
             success_tolerance=self.success_tolerance_noise * scale.noise,
             competence_radius=self.competence_radius_noise * scale.noise,
+            competence_floor=self.competence_floor_noise * scale.noise,
             reach_threshold=self.reach_threshold_noise * scale.noise,
             mode3_radius=self.mode3_radius_noise * scale.noise,
             min_region_width=self.min_region_width_size * scale.size,

@@ -68,7 +68,7 @@ def region_tree_for(config: LearnerConfig, scale: WorldScale) -> RegionTree:
     c = config
     return RegionTree(scale.low_array, scale.high_array, c.max_goals_per_region, c.zeta,
                       c.min_goals_per_child, c.distances(scale).min_region_width,
-                      c.interest_noise_correction)
+                      c.interest_noise_correction, c.region_split)
 
 
 def goal_mode_probabilities(config: LearnerConfig, learner: str) -> tuple[float, float, float]:
@@ -276,7 +276,8 @@ class GoalBabblingLearner(Learner):
         d = self.config.distances(self.scale)
         reference = (process.start_distance if self.config.competence_reference == "memory"
                      else d.competence_radius)
-        comp = competence(process.goal, process.best_outcome, reference, d.success_tolerance)
+        comp = competence(process.goal, process.best_outcome, reference, d.success_tolerance,
+                          d.competence_floor)
         self.tree.add(process.goal, comp)
         self.n_goals += 1
         if isinstance(process, GoalAttempt):

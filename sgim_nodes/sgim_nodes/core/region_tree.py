@@ -5,6 +5,12 @@ region: |sum(older half) - sum(newer half)| / zeta.  Regions split once they hol
 ``max_goals`` goals, at the cut maximising the difference of interest of the two children,
 so that the tree separates where the learner progresses from where it does not.
 
+Split quality: the cut maximising |interest(left) - interest(right)| alone (``gap``) favours
+lopsided cuts, since a child of a few goals has the most extreme window; Baranes & Oudeyer
+(2013, after R-IAC, 2009) weigh the gap by the children's sizes, Qual = card(left) *
+card(right) * sqrt(|interest(left) - interest(right)|) (``balanced``), so a cut must separate
+two well-populated parts of the region.
+
 Noise: with 10 goals per half, the difference of two half-sums is mostly sampling noise when
 competences scatter (measured: shuffling a leaf's window gave as much interest as its real
 order, docs/learners.md). ``noise_correction`` c removes from the difference of the halves'
@@ -72,19 +78,30 @@ class Region:
         return bool(np.all(point >= self.low) and np.all(point <= self.high))
 
 
+SPLIT_QUALITIES = ("gap", "balanced")
+
+
+def split_quality(kind: str, gap: float, n_left: int, n_right: int) -> float:
+    """``gap``: the interest gap; ``balanced``: card(left) * card(right) * sqrt(gap)."""
+    if kind == "balanced":
+        return float(n_left * n_right * np.sqrt(gap))
+    return float(gap)
+
+
 @dataclass(frozen=True)
 class SplitChoice:
     dim: int
     value: float
-    score: float  # |interest(left) - interest(right)|
+    score: float  # split_quality of the cut
     n_left: int
     n_right: int
 
 
 def best_split(goals: np.ndarray, competences: np.ndarray, low: np.ndarray, high: np.ndarray,
                zeta: int, min_per_child: int, min_width: float,
-               noise_correction: float = 0.0) -> SplitChoice | None:
-    """The cut maximising |interest(left) - interest(right)| (left: coordinate < value).
+               noise_correction: float = 0.0, quality: str = "gap") -> SplitChoice | None:
+    """The cut maximising split_quality(quality, ...) (left: coordinate < value); ``gap`` is
+    |interest(left) - interest(right)|.
 
     Candidates: every midpoint between consecutive distinct sorted coordinates of the goals,
     on every dimension at least ``min_width`` wide, leaving >= min_per_child goals per side.
@@ -105,8 +122,9 @@ def best_split(goals: np.ndarray, competences: np.ndarray, low: np.ndarray, high
             n_left = int(left.sum())
             if n_left < min_per_child or n - n_left < min_per_child:
                 continue
-            score = abs(interest(competences[left], zeta, noise_correction)
-                        - interest(competences[~left], zeta, noise_correction))
+            gap = abs(interest(competences[left], zeta, noise_correction)
+                      - interest(competences[~left], zeta, noise_correction))
+            score = split_quality(quality, gap, n_left, n - n_left)
             key = (round(score, 12), -abs(2 * n_left - n))
             if best_key is None or key > best_key:
                 best_key = key
@@ -120,13 +138,16 @@ class RegionTree:
 
     def __init__(self, low: np.ndarray, high: np.ndarray, max_goals: int, zeta: int,
                  min_per_child: int = 5, min_width: float = 0.05,
-                 noise_correction: float = 0.0) -> None:
+                 noise_correction: float = 0.0, split: str = "gap") -> None:
+        if split not in SPLIT_QUALITIES:
+            raise ValueError(f"split must be one of {SPLIT_QUALITIES}, got {split!r}")
         self.root = Region(np.array(low, dtype=float), np.array(high, dtype=float))
         self.max_goals = max_goals
         self.zeta = zeta
         self.min_per_child = min_per_child
         self.min_width = min_width
         self.noise_correction = noise_correction
+        self.split = split
         self._leaves: list[Region] = [self.root]
 
     @property
@@ -153,7 +174,7 @@ class RegionTree:
     def _split(self, leaf: Region) -> None:
         choice = best_split(np.array(leaf.goals), np.array(leaf.competences), leaf.low,
                             leaf.high, self.zeta, self.min_per_child, self.min_width,
-                            self.noise_correction)
+                            self.noise_correction, self.split)
         if choice is None:
             # No valid cut (e.g. every goal on one point): retry once the region grew by half,
             # so a stuck region does not cost a full search on every goal.

@@ -120,7 +120,8 @@ class LowLevelExplorer(AsyncNode):
                          if self.config.competence_reference == "memory"
                          else self.distances.competence_radius)
             result.competence = competence(goal, attempt.best_outcome, reference,
-                                           self.distances.success_tolerance)
+                                           self.distances.success_tolerance,
+                                           self.distances.competence_floor)
         if used > 0:  # an attempted goal, even an interrupted one, counts for the interest
             self._competences.publish(Competence(
                 stamp=self.get_clock().now().to_msg(), goal_index=request.goal_index,

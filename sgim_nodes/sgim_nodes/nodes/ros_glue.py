@@ -19,6 +19,7 @@ from sgim_nodes.core.config import INVERSE_MODELS, OPTIMISERS, LearnerConfig
 from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS  # noqa: F401 - for nodes
 from sgim_nodes.core.learners import LEARNER_NAMES
 from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
+from sgim_nodes.core.region_tree import SPLIT_QUALITIES
 from sgim_nodes.core.scale import WorldScale, unit_box
 from sgim_ros.entry import AsyncNode, run_node  # noqa: F401 - the nodes' shared entry point
 from sgim_ros.params import Param, ParameterError, at_least, between, declare, one_of, positive
@@ -119,13 +120,15 @@ LEARNER_BOUNDS = {
     **dict.fromkeys(("mode3_radius_noise", "reach_threshold_noise", "nm_initial_step",
                      "local_radius_action", "local_step_fraction", "failure_cost_size",
                      "imitation_epsilon", "memory_rebuild_fraction", "explore_distance_size",
-                     "trust_radius_action", "competence_radius_noise"), positive),
+                     "trust_radius_action", "competence_radius_noise",
+                     "competence_floor_noise"), positive),
     **dict.fromkeys(("alpha", "explore_gain", "min_region_width_size", "explore_action",
                      "success_tolerance_noise", "interest_noise_correction",
                      "imitation_count"), at_least(0)),
     "inverse_model": one_of(*INVERSE_MODELS),
     "optimiser": one_of(*OPTIMISERS),
     "competence_reference": one_of("memory", "fixed"),
+    "region_split": one_of(*SPLIT_QUALITIES),
 }
 
 

@@ -394,7 +394,8 @@ class SocialInteraction(AsyncNode):
                              if self.config.competence_reference == "memory"
                              else self.distances.competence_radius)
                 comp = competence(goal, vec(result.best_outcome), reference,
-                                  self.distances.success_tolerance)
+                                  self.distances.success_tolerance,
+                                  self.distances.competence_floor)
             self._competences.publish(Competence(
                 stamp=self.get_clock().now().to_msg(), goal_index=0,
                 movement_index=self.count, goal=floats(goal), reached=result.best_outcome,
