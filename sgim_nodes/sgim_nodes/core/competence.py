@@ -47,25 +47,6 @@ def competence(goal: np.ndarray, best_outcome: np.ndarray | None, start_distance
     return -min(1.0, excess / base)
 
 
-def progress(goal: np.ndarray, best_outcome: np.ndarray | None, start_distance: float,
-             success_tolerance: float, floor: float | None = None) -> float:
-    """How much one attempt gained on memory at its own goal, in [-1, 1]: memory's distance
-    to the goal before it minus the attempt's best, both beyond the tolerance, over the same
-    reference as the competence. Signed: an attempt that lands farther than memory counts
-    against, so noise alone (luck one way, bad luck the other) sums to about nothing, while
-    an unreachable goal whose nearest reachable outcome memory already holds gives at most
-    noise and a mastered goal 0."""
-    if best_outcome is None:
-        return -1.0
-    d = float(np.linalg.norm(np.asarray(best_outcome, float) - np.asarray(goal, float)))
-    if not math.isfinite(start_distance):
-        return 1.0
-    base = max(start_distance - success_tolerance,
-               success_tolerance if floor is None else floor)
-    gained = max(0.0, start_distance - success_tolerance) - max(0.0, d - success_tolerance)
-    return float(np.clip(max(0.0, gained - success_tolerance) / base, 0.0, 1.0))
-
-
 def start_distance(closest_distance: float, goal: np.ndarray, centre: np.ndarray) -> float:
     """Memory's distance to the goal before an attempt; with an empty memory, the distance
     from the goal to the centre of the outcome box (where a learner with no experience may as

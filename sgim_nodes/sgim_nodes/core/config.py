@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
-from .region_tree import INTEREST_MEASURES, SPLIT_QUALITIES
+from .region_tree import SPLIT_QUALITIES
 from .scale import WorldScale
 
 INVERSE_MODELS = ("nearest", "reliable", "local-linear")
@@ -77,11 +77,6 @@ class LearnerConfig:
     the default: with competence against memory, unreachable and mastered goals already have
     constant competences, and on the fishing world the paper's formula kept mode-1 goals off
     the land (docs/learners.md); 1 spread goals more evenly on the arms."""
-    interest_measure: str = "derivative"
-    """What a region's interest reads (region_tree): ``derivative`` is the paper's eq. 2, the
-    change of competence between the halves of the last zeta goals; ``progress`` sums, over
-    the last zeta goals, each attempt's own progress on its goal (its competence minus memory's
-    competence on that goal before it, competence.progress), divided by zeta."""
     region_split: str = "gap"
     """How a full region chooses its cut (region_tree.split_quality): ``gap`` maximises the
     children's interest difference alone; ``balanced`` maximises card(left) * card(right) *
@@ -224,8 +219,6 @@ class LearnerConfig:
             fail("inverse_model", f"must be one of {', '.join(INVERSE_MODELS)}")
         if self.competence_reference not in ("memory", "fixed"):
             fail("competence_reference", "must be memory or fixed")
-        if self.interest_measure not in INTEREST_MEASURES:
-            fail("interest_measure", f"must be one of {', '.join(INTEREST_MEASURES)}")
         if self.region_split not in SPLIT_QUALITIES:
             fail("region_split", f"must be one of {', '.join(SPLIT_QUALITIES)}")
         if self.optimiser not in OPTIMISERS:

@@ -26,7 +26,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .competence import competence, progress, start_distance
+from .competence import competence, start_distance
 from .config import LearnerConfig
 from .environment import ResultLike, is_success
 from .goal_reaching import GoalAttempt, probe_scale_for
@@ -68,7 +68,7 @@ def region_tree_for(config: LearnerConfig, scale: WorldScale) -> RegionTree:
     c = config
     return RegionTree(scale.low_array, scale.high_array, c.max_goals_per_region, c.zeta,
                       c.min_goals_per_child, c.distances(scale).min_region_width,
-                      c.interest_noise_correction, c.region_split, c.interest_measure)
+                      c.interest_noise_correction, c.region_split)
 
 
 def goal_mode_probabilities(config: LearnerConfig, learner: str) -> tuple[float, float, float]:
@@ -278,12 +278,7 @@ class GoalBabblingLearner(Learner):
                      else d.competence_radius)
         comp = competence(process.goal, process.best_outcome, reference, d.success_tolerance,
                           d.competence_floor)
-        if self.config.interest_measure == "progress":
-            self.tree.add(process.goal, comp, progress(
-                process.goal, process.best_outcome, process.start_distance,
-                d.success_tolerance, d.competence_floor))
-        else:
-            self.tree.add(process.goal, comp)
+        self.tree.add(process.goal, comp)
         self.n_goals += 1
         if isinstance(process, GoalAttempt):
             self.last_attempt_goal = process.goal.copy()

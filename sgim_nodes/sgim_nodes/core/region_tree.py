@@ -50,27 +50,6 @@ def interest(competences: np.ndarray | list[float], zeta: int,
     return float(h * gap / zeta)
 
 
-def mean_progress(progress: np.ndarray | list[float], zeta: int) -> float:
-    """Interest as the summed progress of the last zeta attempts divided by zeta (competence
-    after each attempt minus memory's competence on its goal before it, competence.progress):
-    the progress each attempt made, read directly rather than as a difference of two halves.
-    Negative sums (noise where memory is already best) count as no interest."""
-    p = np.asarray(progress, dtype=float)[-zeta:]
-    return float(max(0.0, p.sum()) / zeta) if len(p) else 0.0
-
-
-INTEREST_MEASURES = ("derivative", "progress")
-
-
-def values_interest(values: np.ndarray | list[float], zeta: int, noise_correction: float,
-                    measure: str) -> float:
-    """The interest of a window of competences (``derivative``, eq. 2) or of per-attempt
-    progress values (``progress``)."""
-    if measure == "progress":
-        return mean_progress(values, zeta)
-    return interest(values, zeta, noise_correction)
-
-
 @dataclass(eq=False)  # identity comparison: regions are tree nodes
 class Region:
     """A box [low, high) of the outcome space (closed on the upper bound of the space)."""
@@ -79,7 +58,6 @@ class Region:
     high: np.ndarray
     goals: list[np.ndarray] = field(default_factory=list)
     competences: list[float] = field(default_factory=list)
-    progress: list[float] = field(default_factory=list)
     children: tuple[Region, Region] | None = None
     split_dim: int = -1
     split_value: float = 0.0
@@ -93,10 +71,7 @@ class Region:
     def volume(self) -> float:
         return float(np.prod(self.high - self.low))
 
-    def interest(self, zeta: int, noise_correction: float = 0.0,
-                 measure: str = "derivative") -> float:
-        if measure == "progress":
-            return mean_progress(self.progress, zeta)
+    def interest(self, zeta: int, noise_correction: float = 0.0) -> float:
         return interest(self.competences, zeta, noise_correction)
 
     def contains(self, point: np.ndarray) -> bool:
@@ -124,8 +99,7 @@ class SplitChoice:
 
 def best_split(goals: np.ndarray, competences: np.ndarray, low: np.ndarray, high: np.ndarray,
                zeta: int, min_per_child: int, min_width: float,
-               noise_correction: float = 0.0, quality: str = "gap",
-               measure: str = "derivative") -> SplitChoice | None:
+               noise_correction: float = 0.0, quality: str = "gap") -> SplitChoice | None:
     """The cut maximising split_quality(quality, ...) (left: coordinate < value); ``gap`` is
     |interest(left) - interest(right)|.
 
@@ -148,8 +122,8 @@ def best_split(goals: np.ndarray, competences: np.ndarray, low: np.ndarray, high
             n_left = int(left.sum())
             if n_left < min_per_child or n - n_left < min_per_child:
                 continue
-            gap = abs(values_interest(competences[left], zeta, noise_correction, measure)
-                      - values_interest(competences[~left], zeta, noise_correction, measure))
+            gap = abs(interest(competences[left], zeta, noise_correction)
+                      - interest(competences[~left], zeta, noise_correction))
             score = split_quality(quality, gap, n_left, n - n_left)
             key = (round(score, 12), -abs(2 * n_left - n))
             if best_key is None or key > best_key:
@@ -164,13 +138,9 @@ class RegionTree:
 
     def __init__(self, low: np.ndarray, high: np.ndarray, max_goals: int, zeta: int,
                  min_per_child: int = 5, min_width: float = 0.05,
-                 noise_correction: float = 0.0, split: str = "gap",
-                 measure: str = "derivative") -> None:
+                 noise_correction: float = 0.0, split: str = "gap") -> None:
         if split not in SPLIT_QUALITIES:
             raise ValueError(f"split must be one of {SPLIT_QUALITIES}, got {split!r}")
-        if measure not in INTEREST_MEASURES:
-            raise ValueError(f"measure must be one of {INTEREST_MEASURES}, got {measure!r}")
-        self.measure = measure
         self.root = Region(np.array(low, dtype=float), np.array(high, dtype=float))
         self.max_goals = max_goals
         self.zeta = zeta
@@ -191,23 +161,20 @@ class RegionTree:
             node = node.children[0] if left else node.children[1]
         return node
 
-    def add(self, goal: np.ndarray, competence: float, progress: float = 0.0) -> Region:
-        """Record one attempted goal (with its competence and, for the ``progress`` measure,
-        its progress); split its leaf if it now holds more than max_goals."""
+    def add(self, goal: np.ndarray, competence: float) -> Region:
+        """Record one attempted goal; split its leaf if it now holds more than max_goals."""
         goal = np.clip(np.asarray(goal, dtype=float), self.root.low, self.root.high)
         leaf = self.leaf_for(goal)
         leaf.goals.append(goal)
         leaf.competences.append(float(competence))
-        leaf.progress.append(float(progress))
         if len(leaf.goals) > max(self.max_goals, leaf.retry_at - 1):
             self._split(leaf)
         return leaf
 
     def _split(self, leaf: Region) -> None:
-        values = leaf.progress if self.measure == "progress" else leaf.competences
-        choice = best_split(np.array(leaf.goals), np.array(values), leaf.low,
+        choice = best_split(np.array(leaf.goals), np.array(leaf.competences), leaf.low,
                             leaf.high, self.zeta, self.min_per_child, self.min_width,
-                            self.noise_correction, self.split, self.measure)
+                            self.noise_correction, self.split)
         if choice is None:
             # No valid cut (e.g. every goal on one point): retry once the region grew by half,
             # so a stuck region does not cost a full search on every goal.
@@ -218,17 +185,16 @@ class RegionTree:
         right_low = leaf.low.copy()
         right_low[choice.dim] = choice.value
         left, right = Region(leaf.low.copy(), left_high), Region(right_low, leaf.high.copy())
-        for g, c, p in zip(leaf.goals, leaf.competences, leaf.progress, strict=True):
+        for g, c in zip(leaf.goals, leaf.competences, strict=True):
             child = left if g[choice.dim] < choice.value else right
             child.goals.append(g)
             child.competences.append(c)
-            child.progress.append(p)
         leaf.children = (left, right)
         leaf.split_dim, leaf.split_value = choice.dim, choice.value
-        leaf.goals, leaf.competences, leaf.progress = [], [], []
+        leaf.goals, leaf.competences = [], []
         i = self._leaves.index(leaf)
         self._leaves[i:i + 1] = [left, right]
 
     def interests(self) -> np.ndarray:
-        return np.array([leaf.interest(self.zeta, self.noise_correction, self.measure)
+        return np.array([leaf.interest(self.zeta, self.noise_correction)
                          for leaf in self._leaves])
