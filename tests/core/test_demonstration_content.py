@@ -47,10 +47,14 @@ class _Spy:
 
 
 def _warm_learner(arm: PlanarArm, movements: int = 60):
+    """At least ``movements`` movements, then on to the end of the running attempt, so that
+    the demonstration interrupts nothing (an interrupted attempt would record its own goal)."""
     learner = make_learner("sgim-d", arm.action_dim, arm.outcome_dim, 0, None, arm.scale)
-    for _ in range(movements):
+    done = 0
+    while done < movements or not learner.process.done:
         a, _label = learner.next_action()
         learner.observe(a, arm.execute(a))
+        done += 1
     return learner, _Spy(learner)
 
 

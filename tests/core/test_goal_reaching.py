@@ -89,13 +89,13 @@ def _run(attempt, world, mem):
 def test_stops_when_the_goal_is_reached(optimiser):
     cfg = LearnerConfig(explore_gain=0.0, goal_budget=10, optimiser=optimiser,
                         attempt_patience=10)
-    mem, inv = _setup(cfg, n=20)
+    mem, inv = _setup(cfg, n=60)  # enough casts around each action for the local fits
     goal = np.array([0.3, -0.25])  # outside the memory's [-0.2, 0.2] box
     att = _attempt(goal, mem, inv, cfg)
     labels = _run(att, IdentityWorld(), mem)
     assert labels[0] == "goal_directed" and att.start_distance > 0.05
     assert att.best_distance < att.start_distance  # it gained on memory
-    assert len(mem) == 20 + len(labels)  # every movement stored
+    assert len(mem) == 60 + len(labels)  # every movement stored
     if att.best_distance < cfg.distances(SCALE).reach_threshold:
         assert len(labels) < 10
 

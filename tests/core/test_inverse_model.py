@@ -67,6 +67,26 @@ def test_local_linear_steps_along_a_determined_slope():
     assert est.predicted_outcome == pytest.approx([0.65, 0.0], abs=1e-3)
 
 
+def test_local_linear_does_not_step_on_a_fit_of_too_few_casts():
+    """The same slope as above, but the fit averages fewer casts than ``min_casts``: the model
+    returns the chosen pair's own action rather than follow a slope fitted to a handful of
+    casts."""
+    mem = Memory(1, 2)
+    for x in np.linspace(0.4, 0.6, 9):
+        mem.add(np.array([x]), np.array([x, 0.0]))
+    stepping = InverseModel(mem, "local-linear", l_max=3, local_radius=0.2, local_step=0.05)
+    fit_casts = stepping.best_predicted(np.array([0.7, 0.0]))[3].n_effective
+    assert 3 < fit_casts < 9
+    careful = InverseModel(mem, "local-linear", l_max=3, local_radius=0.2, local_step=0.05,
+                           min_casts=fit_casts + 0.5)
+    est = careful.estimate(np.array([0.7, 0.0]))
+    assert est.action[0] == pytest.approx(0.6)  # the nearest pair's own action, not moved
+    assert est.action is not mem.actions[est.candidate_index]  # a copy, never memory itself
+    just_enough = InverseModel(mem, "local-linear", l_max=3, local_radius=0.2,
+                               local_step=0.05, min_casts=fit_casts - 0.5)
+    assert just_enough.estimate(np.array([0.7, 0.0])).action[0] == pytest.approx(0.65, abs=1e-6)
+
+
 def test_empty_memory_gives_none():
     for method in ("nearest", "reliable", "local-linear"):
         assert InverseModel(Memory(1, 2), method).estimate(np.zeros(2)) is None

@@ -120,6 +120,13 @@ class LearnerConfig:
     local_step_fraction: float = 0.25
     """The local-linear inverse moves the chosen action towards the goal by at most this
     fraction of the fit's radius.  Chosen by measurement (docs/learners.md)."""
+    local_min_casts: float = 10.0
+    """The local-linear inverse takes its step only when the fit averages at least this many
+    casts (its effective number of pairs, local_model.LocalFit.n_effective); below, it returns
+    the chosen pair's own action. A linear model of 24 action numbers fitted on a handful of
+    casts is fitted to their noise: on a sparse fishing memory such steps made the inverse
+    model worse than the nearest neighbour (docs/learners.md, section 1). 10 keeps the whole
+    benefit of the step on the arms' validation goals (25 lost part of it). Chosen."""
 
     # --- goal reaching ---
     explore_gain: float = 4.0
@@ -208,7 +215,8 @@ class LearnerConfig:
             if not getattr(self, name) > 0.0:
                 fail(name, "must be > 0")
         for name in ("alpha", "explore_gain", "min_region_width_size", "explore_action",
-                     "success_tolerance_noise", "interest_noise_correction"):
+                     "success_tolerance_noise", "interest_noise_correction",
+                     "local_min_casts"):
             if getattr(self, name) < 0.0:
                 fail(name, "must be >= 0")
         if not 0.0 <= self.explore_cap <= 1.0:

@@ -16,7 +16,10 @@ linear model fitted in that action's own neighbourhood:
   single stored outcome carries it whole. A candidate with no close pairs is ranked by its own
   stored outcome, so on a memory with no clusters this is the nearest neighbour. The chosen
   action is then moved by one step of that model towards the goal, no farther than
-  ``local_step`` (a quarter of the fitted radius by default: measured, docs/learners.md).
+  ``local_step`` (a quarter of the fitted radius by default: measured, docs/learners.md),
+  and only when the fit averages at least ``min_casts`` casts: a fit on a handful of casts
+  in 24 dimensions follows their noise, and its step lost to the nearest neighbour on sparse
+  fishing memories.
 
 docs/learners.md compares the three on the same memories (benchmarks/bench_inverse.py).
 """
@@ -57,7 +60,8 @@ class InverseModel:
 
     def __init__(self, memory: Memory, method: str = "reliable", l_max: int = 10,
                  k_max: int = 5, alpha: float = 0.5, local_radius: float = 1.0,
-                 local_neighbours: int = 60, local_step: float = 0.25) -> None:
+                 local_neighbours: int = 60, local_step: float = 0.25,
+                 min_casts: float = 0.0) -> None:
         if method not in ("nearest", "reliable", "local-linear"):
             raise ValueError(f"unknown inverse model {method!r}")
         self.memory = memory
@@ -68,6 +72,7 @@ class InverseModel:
         self.local_radius = local_radius
         self.local_neighbours = local_neighbours
         self.local_step = local_step
+        self.min_casts = min_casts
 
     def most_reliable(self, goal: np.ndarray) -> tuple[int, float]:
         """Memory index and score of the most reliable of the l_max candidates."""
@@ -94,7 +99,7 @@ class InverseModel:
             outcome = mem.outcomes[index].copy()
         else:
             index, score, outcome, fit = self.best_predicted(goal)
-            if fit is not None:
+            if fit is not None and fit.n_effective >= self.min_casts:
                 action, predicted = local_model.step(fit, goal, self.local_step)
                 # A flat or undetermined fit predicts (almost) no change: then stay put.
                 if np.linalg.norm(predicted - fit.outcome) > 0.05 * score:

@@ -60,7 +60,8 @@ def inverse_model_for(memory: Memory, config: LearnerConfig) -> InverseModel:
     c = config
     radius = c.local_radius_action * float(np.sqrt(memory.action_dim))
     return InverseModel(memory, c.inverse_model, c.l_max, c.k_max, c.alpha, radius,
-                        c.local_neighbours, c.local_step_fraction * radius)
+                        c.local_neighbours, c.local_step_fraction * radius,
+                        c.local_min_casts)
 
 
 def region_tree_for(config: LearnerConfig, scale: WorldScale) -> RegionTree:

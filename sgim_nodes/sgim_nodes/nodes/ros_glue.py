@@ -124,7 +124,7 @@ LEARNER_BOUNDS = {
                      "competence_floor_noise"), positive),
     **dict.fromkeys(("alpha", "explore_gain", "min_region_width_size", "explore_action",
                      "success_tolerance_noise", "interest_noise_correction",
-                     "imitation_count"), at_least(0)),
+                     "imitation_count", "local_min_casts"), at_least(0)),
     "inverse_model": one_of(*INVERSE_MODELS),
     "optimiser": one_of(*OPTIMISERS),
     "competence_reference": one_of("memory", "fixed"),
