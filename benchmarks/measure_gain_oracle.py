@@ -9,6 +9,8 @@ arm (least squares), cast ``--casts`` times with the arm's noise (the median att
 our learners is 1 to 3 movements; the budget is 10). Its best noisy distance against memory's
 closest is the noisy gain an oracle would show. The same with noise-free distances on both
 sides (each stored action re-evaluated on the noise-free arm) is the gain measured fairly.
+Beside the oracle, the learner's own goal-directed attempt (GoalAttempt, no exploration) on
+each goal, from a copy of the same memory, measured both ways.
 
 Run: .venv/bin/python benchmarks/measure_gain_oracle.py --world arm-20 --seeds 0 1 2
 """
@@ -16,6 +18,8 @@ Run: .venv/bin/python benchmarks/measure_gain_oracle.py --world arm-20 --seeds 0
 from __future__ import annotations
 
 import argparse
+import copy
+import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -23,10 +27,11 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_learners import goals_for
+from bench_learners import goals_for, parse_set
 
 from sgim_nodes.core.config import LearnerConfig
-from sgim_nodes.core.learners import make_learner
+from sgim_nodes.core.goal_reaching import GoalAttempt, probe_scale_for
+from sgim_nodes.core.learners import inverse_model_for, make_learner
 from sgim_nodes.core.planar_arm import ARMS
 from sgim_nodes.core.runner import build_world, run
 
@@ -44,7 +49,38 @@ def oracle_gains(memory, goals: np.ndarray, postures: np.ndarray, noisy, exact,
         mem_true = float(np.linalg.norm(exact.forward(memory.actions[int(i[0])]) - goal))
         true_gain.append(mem_true - float(np.linalg.norm(exact.forward(posture) - goal)))
     g = np.array(noisy_gain)
-    return float(g.mean()), float(np.mean(true_gain)), float(np.mean(g > 0))
+    return float(g.mean()), float(np.mean(true_gain)), float(np.mean(g > 0)), float(casts)
+
+
+def attempt_gains(learner, goals: np.ndarray, noisy, exact, seed: int,
+                  overrides: dict) -> tuple[float, float, float, float]:
+    """The learner's own goal-directed attempt at each goal, each from a copy of its memory
+    (``overrides``: LearnerConfig values for the attempt only): (noisy gain, noise-free gain,
+    share of goals where the noisy gain is positive, mean movements per attempt)."""
+    config = dataclasses.replace(learner.config, explore_gain=0.0, **overrides)
+    rng = np.random.default_rng(seed)
+    noisy_gain, true_gain, lengths = [], [], []
+    for goal in goals:
+        memory = copy.deepcopy(learner.memory)
+        d_mem, i = memory.nearest(goal, 1)
+        attempt = GoalAttempt(goal, memory, inverse_model_for(memory, config), config,
+                              learner.scale, rng, memory.action_dim,
+                              probe_scale_for(config, learner.scale, memory.action_dim))
+        best_action, best = None, float("inf")
+        while not attempt.done:
+            action, label = attempt.next_action()
+            result = noisy.execute(action)
+            memory.add(action, result.outcome, label)
+            attempt.observe(action, result)
+            if attempt.best_distance < best:
+                best, best_action = attempt.best_distance, np.asarray(action, float).copy()
+        noisy_gain.append(float(d_mem[0]) - best)
+        mem_true = float(np.linalg.norm(exact.forward(learner.memory.actions[int(i[0])]) - goal))
+        true_gain.append(mem_true - float(np.linalg.norm(exact.forward(best_action) - goal)))
+        lengths.append(attempt.movements)
+    g = np.array(noisy_gain)
+    return (float(g.mean()), float(np.mean(true_gain)), float(np.mean(g > 0)),
+            float(np.mean(lengths)))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -55,7 +91,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--checkpoints", type=int, nargs="+", default=[500, 1000, 2000, 5000])
     p.add_argument("--casts", type=int, nargs="+", default=[1, 3, 10],
                    help="movements of the oracle's attempt")
+    p.add_argument("--attempt-set", action="append", default=[], metavar="NAME=VALUE",
+                   help="a LearnerConfig value for our probe attempts only, e.g. "
+                        "attempt_patience=10 (repeatable; the learning run keeps the defaults)")
     a = p.parse_args(argv)
+    overrides = parse_set(a.attempt_set)
     t0 = time.perf_counter()
     postures, goals = goals_for(a.world, "validation")
     exact = ARMS[a.world].make(0, noise=0.0)
@@ -74,10 +114,15 @@ def main(argv: list[str] | None = None) -> int:
             for casts in a.casts:
                 rows.setdefault((checkpoint, casts), []).append(
                     oracle_gains(learner.memory, goals, postures, noisy, exact, casts))
-    print(f"{'movements':>9s} {'casts':>5s}  noisy gain (positive share)   noise-free gain")
+            rows.setdefault((checkpoint, 0), []).append(
+                attempt_gains(learner, goals, noisy, exact, seed, overrides))
+    print(f"attempt settings: {overrides or 'the defaults'}")
+    print(f"{'movements':>9s} {'attempt':>18s} {'length':>6s}  noisy gain (positive share)"
+          "   noise-free gain")
     for (checkpoint, casts), r in sorted(rows.items()):
-        noisy_gain, true_gain, positive = np.mean(r, axis=0)
-        print(f"{checkpoint:9d} {casts:5d}  {noisy_gain:+.4f} ({positive:.2f})"
+        noisy_gain, true_gain, positive, length = np.mean(r, axis=0)
+        who = "ours (GoalAttempt)" if casts == 0 else "oracle"
+        print(f"{checkpoint:9d} {who:>18s} {length:6.1f}  {noisy_gain:+.4f} ({positive:.2f})"
               f"               {true_gain:+.4f}")
     print(f"({len(a.seeds)} seeds, {time.perf_counter() - t0:.0f} s)")
     return 0
