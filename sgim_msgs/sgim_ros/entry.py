@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import os
+import select
 import signal
 import sys
 import threading
@@ -177,22 +178,23 @@ def follow_launcher(grace: float = LAUNCHER_GRACE) -> bool:
         return True  # not started by the launcher (or the variable without its pipe)
     with contextlib.suppress(OSError, AttributeError):
         ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGINT, 0, 0, 0)
-    os.set_blocking(fd, False)  # did the launcher die before the signal was armed?
-    try:
-        if not os.read(fd, 64):
-            return False
-    except BlockingIOError:
-        pass
-    finally:
-        os.set_blocking(fd, True)
+    # Did the launcher die before the signal was armed? Ask without reading: every node of a
+    # run holds this same open file description, so its blocking flag is shared, and a node
+    # that set it non-blocking for a check could find it set back by another (it then waited
+    # for the launcher's end instead of starting). The launcher never writes: the pipe becomes
+    # readable only at its end of file.
+    readable, _, _ = select.select([fd], [], [], 0)
+    if readable and not os.read(fd, 64):
+        return False
 
     def watch() -> None:
         while True:
             try:
+                select.select([fd], [], [])  # whatever the shared blocking flag says
                 if not os.read(fd, 64):
                     break  # every write end is closed: the launcher is gone
-            except InterruptedError:
-                continue
+            except (InterruptedError, BlockingIOError):
+                continue  # another node read first, or a signal: wait again
             except OSError:
                 break
         time.sleep(grace)

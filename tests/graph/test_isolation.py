@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -172,3 +173,48 @@ def test_a_launcher_stops_its_run_when_the_study_that_started_it_is_killed(tmp_p
         if pid is not None:
             with contextlib.suppress(ProcessLookupError):
                 os.killpg(pid, signal.SIGKILL)
+
+
+STARTER = """
+import os, sys
+from sgim_ros.entry import follow_launcher
+os.environ["SGIM_LAUNCHER_FD"] = sys.argv[1]
+for _ in range(int(sys.argv[2])):
+    assert follow_launcher(grace=600.0)
+print("started", flush=True)
+"""
+
+# Another node of the same run, starting at the same moment: it shares the pipe's open file
+# description, and with it the description's blocking flag, which it sets back to blocking.
+OTHER_NODE = """
+import os, sys
+fd = int(sys.argv[1])
+while True:
+    os.set_blocking(fd, True)
+"""
+
+
+@pytest.mark.ros
+def test_nodes_starting_together_never_block_on_their_shared_lifeline():
+    """Every node of a run inherits the same read end of the launcher's pipe. Checking it for
+    the launcher's death must not depend on the pipe's blocking flag, which the nodes share: a
+    node that found the pipe blocking waited for the launcher's end instead of starting (seen:
+    an evaluator that never started, and its run aborted after 60 s)."""
+    read_end, write_end = os.pipe()
+    other = subprocess.Popen([sys.executable, "-c", OTHER_NODE, str(read_end)],
+                             pass_fds=(read_end,))
+    try:
+        child = subprocess.Popen([sys.executable, "-c", STARTER, str(read_end), "300"],
+                                 pass_fds=(read_end,), stdout=subprocess.PIPE, text=True)
+        try:
+            out, _ = child.communicate(timeout=60)
+        except subprocess.TimeoutExpired:
+            child.kill()
+            child.communicate()
+            pytest.fail("a check of the lifeline blocked while the launcher was alive")
+        assert child.returncode == 0 and out.strip() == "started"
+    finally:
+        other.kill()
+        other.wait()
+        os.close(read_end)
+        os.close(write_end)
