@@ -91,6 +91,17 @@ def test_default_values_make_the_default_run_once():
     assert "--param" not in runs[0].argv()
 
 
+def test_a_teacher_parameter_at_its_default_names_no_run_apart():
+    """The teacher's own defaults count as defaults, not only learner.yaml's: the paper's
+    choice rule, written out, is the paper's run."""
+    runs = expand({"seeds": [0], "learner": "sgim-d",
+                   "param": {"teacher_choice": ["random-unreached", "nearest-unreached"]}})
+    assert [r.name for r in runs] == ["sgim-d-seed0",
+                                      "sgim-d-teacher_choice=nearest-unreached-seed0"]
+    assert "--param" not in runs[0].argv()
+    assert runs[1].argv()[-2:] == ["--param", "teacher_choice=nearest-unreached"]
+
+
 def test_seed_forms():
     assert [r.seed for r in expand({"learner": "random", "seeds": 3})] == [0, 1, 2]
     assert [r.seed for r in expand({"learner": "random", "seeds": [4, 7]})] == [4, 7]
