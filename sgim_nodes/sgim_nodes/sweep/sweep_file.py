@@ -37,12 +37,10 @@ from sgim_nodes.core.learners import LEARNER_NAMES
 from sgim_nodes.graph import experiment
 from sgim_nodes.graph.description import (
     ARBITER_TEACHER,
-    NODES,
     OPTION_PARAMETERS,
     SOCIAL,
     STORAGES,
     check,
-    declared,
     learner_defaults,
 )
 from sgim_nodes.graph.experiment import REPO
@@ -136,17 +134,8 @@ def checked_params(params: Iterable[tuple[str, str]]) -> dict[str, Any]:
 
 @cache
 def checked_defaults() -> dict[str, Any]:
-    """Every parameter at its default, as the nodes read it: the default a parameter's nodes
-    declare (when they all declare the same, as the teacher's ``teacher_choice``), then
-    learner.yaml's. A value equal to it names no run apart (``teacher_choice:
-    random-unreached`` is the paper's run)."""
-    values: dict[str, Any] = {}
-    for name, declarations in declared(NODES.values()).items():
-        defaults = {repr(param.default) for _spec, param in declarations}
-        if len(defaults) == 1 and name not in OPTION_PARAMETERS:
-            values[name] = declarations[0][1].default
-    values.update(learner_defaults())
-    return check(values)
+    """Every parameter of learner.yaml at its default, as the nodes read it."""
+    return check(learner_defaults())
 
 
 def yaml_text(value: Any, where: str) -> str:
