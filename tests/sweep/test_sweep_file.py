@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import pytest
 import yaml
 
@@ -183,3 +185,20 @@ def test_shipped_sweep_files_expand():
     for path in SWEEPS.glob("*.yaml"):
         assert load(path).runs, path
         yaml.safe_load(path.read_text())
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["--param", "timing=on-request"], "demo-only: .*demo-only attempts no goals"),
+    (["--learners", "demo-only", "--param", "demonstration_content=goal-only"], "shows none"),
+    (["--param", "timing=sometimes"], "'timing'"),
+])
+def test_run_study_checks_every_param_for_every_learner_first(argv, message, capsys):
+    with pytest.raises(SystemExit):
+        batch.parse_args(argv)
+    assert re.search(message, capsys.readouterr().err)
+
+
+def test_run_study_takes_the_social_modes_its_learners_can_play():
+    args = batch.parse_args(["--learners", "sgim-d", "saggriac", "--param",
+                             "timing=on-request", "--param", "demonstration_content=goal-only"])
+    assert args.param == ["timing=on-request", "demonstration_content=goal-only"]
