@@ -98,11 +98,14 @@ def test_no_cap_without_a_stall_nor_once_the_budget_is_spent():
     assert asks.rule.stalled() and not asks.should_ask(495) and asks.cap(21, 479) == 479
 
 
-def test_answers_are_kept_once_and_only_for_asks_made():
+def test_answers_are_kept_once_and_only_for_asks_made_at_their_count():
     asks, _ = _asks()
-    demo = SimpleNamespace(help_request=1)
+    demo = SimpleNamespace(help_request=1, movement_index=20)
     assert "never made" in asks.answered(demo)
-    asks.rule.asks = 1
+    for c in _flat(None, 20):
+        asks.attempt_ended(np.zeros(2), 1, c, True, 20)
+    asks.ask(20)
+    assert "asked at 20" in asks.answered(SimpleNamespace(help_request=1, movement_index=21))
     assert asks.answered(demo) == "" and asks.answers == {1: demo}
     asks.answers.pop(1)
     assert "answered already" in asks.answered(demo) and asks.answers == {}

@@ -36,6 +36,7 @@ class HelpAsks:
         self._cut: tuple[np.ndarray, float] | None = None  # an attempt the ask interrupts
         self.answers: dict[int, Demonstration] = {}  # answers not yet taken
         self._answered: set[int] = set()
+        self._asked_at: dict[int, int] = {}  # ask index -> the count it was made at
         self._out = node.create_publisher(HelpRequest, "help_requests", qos.RECORDS)
 
     def resume(self, records, count: int) -> None:
@@ -89,16 +90,20 @@ class HelpAsks:
             self._cut = None
         msg = HelpRequest(stamp=self.node.get_clock().now().to_msg(), index=self.rule.asks,
                           movement_index=count, goal=floats(goal))
+        self._asked_at[msg.index] = count
         self._out.publish(msg)
         return msg
 
     def answered(self, demo: Demonstration) -> str:
         """Keep the teacher's answer; '' or why it is not an answer to an ask of this run."""
         index = int(demo.help_request)
-        if not 1 <= index <= self.rule.asks:
+        if index not in self._asked_at:
             return f"it answers help request {index}, which the learner never made"
         if index in self._answered:
             return f"help request {index} was answered already"
+        if int(demo.movement_index) != self._asked_at[index]:
+            return (f"it answers help request {index} at movement {int(demo.movement_index)}, "
+                    f"but the learner asked at {self._asked_at[index]}")
         self._answered.add(index)
         self.answers[index] = demo
         return ""
