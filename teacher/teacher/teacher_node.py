@@ -1,8 +1,14 @@
-"""teacher: the automatic teacher, one demonstration every P movements.
+"""teacher: the automatic teacher, one demonstration every P movements, or when asked.
 
-At the run's start and at every P-th movement it publishes a demonstration drawn by the core
-Teacher among the teaching-set goals the learner has not reached, or an empty one when every
-goal is reached, so that an arbiter waiting at that boundary goes on. "Reached" follows
+With `timing: period` (the paper's), at the run's start and at every P-th movement it
+publishes a demonstration drawn by the core Teacher among the teaching-set goals the learner
+has not reached, or an empty one when every goal is reached, so that an arbiter waiting at that
+boundary goes on. With `timing: on-request` (issue 14, core/help_request.py) it speaks only to
+answer the learner's HelpRequest: the unreached entry nearest the goal asked about
+(Teacher.answer), at the count of the ask, once its mirrored memory is there. What it shows is
+`demonstration_content` (core/teaching.py, Demonstration.shown): the action and its outcome, the
+outcome only (goal-only) or the action only (means-only); what is not shown is never published,
+and only a pair shown whole enters the mirrored memory, as the learner's. "Reached" follows
 `reached_rule` (core/teaching.py):
   ability        (default) the learner's inverse model, asked for the goal now, gives an
                  action whose cast lands within the tolerance of it. The teacher mirrors the
@@ -17,11 +23,11 @@ Its random stream "teacher" and its world's stream make its choices those of the
 single-process runner for the same seed.
 
 Interfaces:
-  subscribes  movements, demonstrations_taken, run_status
+  subscribes  movements, demonstrations_taken, run_status, help_requests (on-request only)
   publishes   demonstrations (sgim_msgs/Demonstration)
 Parameters: the common ones, the memory and inverse-model fields of LearnerConfig,
-demonstration_period, reached_rule, teacher_choice, tolerance_noise, noise (of the teacher's
-own world), teaching_set, movements.
+demonstration_period, reached_rule, teacher_choice, demonstration_content, timing,
+tolerance_noise, noise (of the teacher's own world), teaching_set, movements.
 """
 
 from __future__ import annotations
@@ -29,22 +35,28 @@ from __future__ import annotations
 import numpy as np
 from rclpy.node import Node
 
-from sgim_msgs.msg import Demonstration, RunStatus
+from sgim_msgs.msg import Demonstration, HelpRequest, RunStatus
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.bag.validation import Limits, LiveGate
+from sgim_nodes.core.help_request import DEFAULT_TIMING, ON_REQUEST, TIMINGS
 from sgim_nodes.core.learners import inverse_or_centre
 from sgim_nodes.core.random_streams import component_rng, world_seed
 from sgim_nodes.core.teaching import (
     ABILITY,
+    DEFAULT_DEMONSTRATION_CONTENT,
     DEFAULT_REACHED_RULE,
     DEFAULT_TEACHER_CHOICE,
     DEFAULT_TOLERANCE_NOISE,
+    DEMONSTRATION_CONTENTS,
     OWN_PROCESSES,
     PAPER_PERIOD,
     REACHED_RULES,
     TEACHER_CHOICES,
     Teacher,
     learner_progress,
+)
+from sgim_nodes.core.teaching import (
+    Demonstration as Shown,
 )
 from sgim_nodes.nodes.movement_memory import MovementMemory
 from sgim_nodes.nodes.ros_glue import (
@@ -72,6 +84,13 @@ PARAMS = learner_node_params(
           "demonstrates: 'random-unreached' (the paper), 'farthest-unreached' or "
           "'nearest-unreached' (from what the learner can do); core/teaching.py",
           one_of(*TEACHER_CHOICES)),
+    Param("demonstration_content", DEFAULT_DEMONSTRATION_CONTENT, "what a demonstration "
+          "shows: 'means-and-goal' (the action and its outcome, the paper), 'goal-only' (the "
+          "outcome: emulation) or 'means-only' (the action); core/teaching.py",
+          one_of(*DEMONSTRATION_CONTENTS)),
+    Param("timing", DEFAULT_TIMING, "when it speaks: 'period' (every demonstration_period "
+          "movements, the paper) or 'on-request' (in answer to the learner's help_requests); "
+          "the arbiter's must be the same; core/help_request.py", one_of(*TIMINGS)),
     Param("tolerance_noise", DEFAULT_TOLERANCE_NOISE, "a teaching goal counts as reached "
           "within this many units of the world's outcome noise", non_negative),
     Param("noise", DEFAULT_NOISE, "motor-command noise of the teacher's own world (the "
@@ -97,12 +116,16 @@ class TeacherNode(Node):
                                p["tolerance_noise"] * p["outcome_noise"],
                                p["teacher_choice"])
         self.rule = p["reached_rule"]
+        self.content = p["demonstration_content"]
+        self.on_request = p["timing"] == ON_REQUEST
+        self.requests: dict[int, HelpRequest] = {}  # asks waiting for the mirror to catch up
         self.action_size = p["action_size"]
         self.world = (FishingWorld(seed=world_seed(p["seed"], "teacher-world"),
                                    noise=p["noise"]) if self.rule == ABILITY else None)
         self.total: int | None = None
         self.given = 0
-        self.answered: set[int] = set()
+        self.answered: set[int] = set()  # periodic turns (movement counts) taken
+        self.answered_requests: set[int] = set()  # HelpRequest indices answered
         # Valid records only (bag/validation.py): a rogue movement moves neither the count
         # nor the mirrored memory; a rogue run status does not end the teaching.
         limits = Limits(action_size=ts.actions.shape[1], outcome_size=ts.outcomes.shape[1],
@@ -114,19 +137,26 @@ class TeacherNode(Node):
             point = resume_point(p["resume_from"], config, p["resume_segments"])
             self.memory.resume(point)
             self.answered = set(point.demonstration_turns)
+            self.answered_requests = set(point.help_requests_answered)
             self.given = point.demonstrations_given
         self._out = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
         # The arbiter starts once these have matched (sgim_ros/ready.py): a missed movement
         # would leave the mirrored memory, and so the teacher's choice, behind the learner's.
-        serve_ready(self, "teacher_ready", {
+        listened = {
             "movements": self.memory.subscription,
             "demonstrations_taken": self.create_subscription(
                 Demonstration, "demonstrations_taken", self._on_taken, qos.RECORDS),
             "run_status": self.create_subscription(
-                RunStatus, "run_status", self._on_status, qos.RECORDS)})
-        self.get_logger().info(f"{len(ts.actions)} teaching entries, period "
-                               f"{p['demonstration_period']}, reached rule {self.rule}, "
-                               f"choice {p['teacher_choice']}")
+                RunStatus, "run_status", self._on_status, qos.RECORDS)}
+        if self.on_request:  # an ask missed would leave the learner waiting for its answer
+            listened["help_requests"] = self.create_subscription(
+                HelpRequest, "help_requests", self._on_request, qos.RECORDS)
+        serve_ready(self, "teacher_ready", listened)
+        when = ("on request" if self.on_request else
+                f"period {p['demonstration_period']}")
+        self.get_logger().info(f"{len(ts.actions)} teaching entries, {when}, reached rule "
+                               f"{self.rule}, choice {p['teacher_choice']}, showing "
+                               f"{self.content}")
 
     @property
     def count(self) -> int:
@@ -148,36 +178,77 @@ class TeacherNode(Node):
         waits on a message."""
         if self.gate.check("demonstrations_taken", msg) or msg.source == AUTOMATIC:
             return
-        if len(msg.action):
+        if len(msg.action) and len(msg.outcome):  # only a pair shown whole is stored
             self.memory.add_demonstration_after(msg.movement_index, vec(msg.action),
                                                 vec(msg.outcome))
+
+    def _on_request(self, msg: HelpRequest) -> None:
+        if self.gate.check("help_requests", msg):
+            return
+        if msg.index in self.answered_requests or msg.index in self.requests:
+            self.get_logger().warning(f"help request {msg.index} again: answered once only")
+            return
+        self.requests[msg.index] = msg
+        self._maybe_teach()
 
     def _own_outcomes(self) -> np.ndarray:
         labels = np.asarray(self.memory.memory.labels)
         return self.memory.memory.outcomes[np.isin(labels, OWN_PROCESSES)]
 
+    def _reached(self):
+        model = self.memory.inverse_model
+        return learner_progress(
+            self.rule, lambda goal: inverse_or_centre(model, goal, self.action_size),
+            self._own_outcomes, self.world)
+
     def _maybe_teach(self) -> None:
+        if self.on_request:
+            self._maybe_answer()
+            return
         k = self.count
         if self.total is None or k >= self.total or k in self.answered:
             return
         if not self.teacher.due(k):
             return
         self.answered.add(k)
-        model = self.memory.inverse_model
-        reached = learner_progress(
-            self.rule, lambda goal: inverse_or_centre(model, goal, self.action_size),
-            self._own_outcomes, self.world)
-        demo = self.teacher.choose(reached)
+        self._publish(self.teacher.choose(self._reached()), k)
+
+    def _maybe_answer(self) -> None:
+        """Answer each ask once the mirrored memory is at its count (the learner waits there,
+        so the count never passes it; an ask the count has passed is not this run's)."""
+        for index in sorted(self.requests):
+            ask = self.requests[index]
+            if ask.movement_index > self.count:
+                return
+            del self.requests[index]
+            if ask.movement_index < self.count:
+                self.get_logger().error(f"help request {index} asks at movement "
+                                        f"{ask.movement_index}, but the learner is at "
+                                        f"{self.count}: not this run's learner; ignored")
+                continue
+            self.answered_requests.add(index)
+            self.get_logger().info(f"help request {index} at movement {self.count}, goal "
+                                   f"{np.round(vec(ask.goal), 3)}")
+            self._publish(self.teacher.answer(vec(ask.goal), self._reached()), self.count,
+                          index)
+
+    def _publish(self, demo: Shown | None, k: int, request: int = 0) -> None:
+        """Show `demo` (None: nothing left to show) as `demonstration_content` says."""
         msg = Demonstration(stamp=self.get_clock().now().to_msg(), movement_index=k,
-                            teaching_set_index=-1, source=AUTOMATIC)
+                            teaching_set_index=-1, source=AUTOMATIC, content=self.content,
+                            help_request=request)
         if demo is not None:
             self.given += 1
+            action, outcome = demo.shown(self.content)
             msg.index, msg.teaching_set_index = self.given, demo.index
-            msg.action, msg.outcome = floats(demo.action), floats(demo.outcome)
-            # The learner stores it right after movement k, as the single-process runner.
-            self.memory.add_demonstration_after(k, demo.action, demo.outcome)
+            msg.action = [] if action is None else floats(action)
+            msg.outcome = [] if outcome is None else floats(outcome)
+            if action is not None and outcome is not None:
+                # The learner stores it right after movement k, as the single-process runner.
+                self.memory.add_demonstration_after(k, action, outcome)
             self.get_logger().info(f"demonstration {self.given} at movement {k}: entry "
-                                   f"{demo.index}, outcome {np.round(demo.outcome, 3)}")
+                                   f"{demo.index}, outcome {np.round(demo.outcome, 3)}, "
+                                   f"showing {self.content}")
         else:
             self.get_logger().info(f"nothing left to demonstrate at movement {k}")
         self._out.publish(msg)

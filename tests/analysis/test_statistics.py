@@ -135,17 +135,21 @@ class _Runs:
 
 
 class _Run:
-    def __init__(self, given: dict[int, bool], seed: int = 0) -> None:
+    """A run's demonstration columns: {movement count: what it showed}, "both" or "means"
+    (means-only: no outcome, a NaN row). The teacher's "nothing to show" turns are not among a
+    run's records (RunRecords.learner_demonstrations), so they are simply absent here."""
+
+    def __init__(self, given: dict[int, str], seed: int = 0) -> None:
         self.seed, self.finished, self.movements_done, self.duration_s = seed, True, 450, 9.0
         self.demo_index = np.array(list(given), dtype=np.int64)
-        self.demo_outcome = np.array([[0.1, 0.2] if shown else [np.nan, np.nan]
+        self.demo_outcome = np.array([[0.1, 0.2] if shown == "both" else [np.nan, np.nan]
                                       for shown in given.values()]).reshape(-1, 2)
 
 
-def test_demonstration_times_count_only_shown_demonstrations_per_run() -> None:
-    # Turn 150 of seed 1 was the teacher's "nothing to show"; random got none at all.
-    study = _Runs({"sgim-d": [_Run({0: True, 150: True}), _Run({0: True, 150: False,
-                                                                  300: True})],
+def test_demonstration_times_count_every_shown_demonstration_per_run() -> None:
+    # Seed 1 had nothing shown at 150 and a means-only demonstration (no outcome) at 300;
+    # random got none at all.
+    study = _Runs({"sgim-d": [_Run({0: "both", 150: "both"}), _Run({0: "both", 300: "means"})],
                    "random": [_Run({}), _Run({})]})
     times = demonstration_times(study)
     assert list(times) == ["sgim-d"]
@@ -155,8 +159,8 @@ def test_demonstration_times_count_only_shown_demonstrations_per_run() -> None:
 
 
 def test_run_summaries_count_each_runs_shown_demonstrations() -> None:
-    study = _Runs({"sgim-d": [_Run({0: True, 150: True}, seed=0),
-                              _Run({0: True, 150: False, 300: True, 450: False}, seed=1)],
+    study = _Runs({"sgim-d": [_Run({0: "both", 150: "both"}, seed=0),
+                              _Run({0: "means", 300: "means"}, seed=1)],
                    "random": [_Run({}, seed=0)]})
     summaries = run_summaries(study)
     assert summaries["sgim-d"].demonstrations == [2, 2]

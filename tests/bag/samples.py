@@ -1,8 +1,8 @@
 """A small synthetic run as rosbags messages (no rclpy), and a writer for it.
 
 The run mimics the node graph's contract: movements 1..n, a goal and a competence every few
-movements, a demonstration mid-run (offered, then taken by the arbiter) followed by imitation
-movements, region maps, evaluations
+movements, a help request mid-run answered by a demonstration (offered, then taken by the
+arbiter) followed by imitation movements, region maps, evaluations
 and a final RunStatus. Values are seeded so tests can rebuild the same records directly.
 """
 
@@ -63,11 +63,22 @@ def region_map(movement_index: int, split: bool):
                                         regions=regions)
 
 
-def demonstration(index: int, movement_index: int, rng: np.random.Generator):
+def demonstration(index: int, movement_index: int, rng: np.random.Generator,
+                  content: str = "means-and-goal", help_request: int = 0):
+    """A demonstration showing what `content` says (the other part empty)."""
+    action, outcome = rng.uniform(-1, 1, 24), rng.uniform(-1, 1, 2)
     return T["sgim_msgs/msg/Demonstration"](
         stamp=stamp(13), index=index, movement_index=movement_index,
-        action=rng.uniform(-1, 1, 24), outcome=rng.uniform(-1, 1, 2),
-        teaching_set_index=index + 4, source="automatic")
+        action=np.zeros(0) if content == "goal-only" else action,
+        outcome=np.zeros(0) if content == "means-only" else outcome,
+        teaching_set_index=index + 4, source="automatic", content=content,
+        help_request=help_request)
+
+
+def help_request(index: int, movement_index: int, rng: np.random.Generator):
+    return T["sgim_msgs/msg/HelpRequest"](stamp=stamp(29), index=index,
+                                          movement_index=movement_index,
+                                          goal=rng.uniform(-1, 1, 2))
 
 
 def evaluation(movement_index: int, rng: np.random.Generator):
@@ -102,8 +113,9 @@ def synthetic_run(n: int = 60, seed: int = 0) -> list[tuple[str, object]]:
         if i % 5 == 1:
             goal_count += 1
             out.append(("goals", goal(goal_count, i - 1, rng)))
-        if i == n // 2:  # a demonstration at count i - 1, taken, then imitation movements
-            demo = demonstration(1, i - 1, rng)
+        if i == n // 2:  # the learner asks at count i - 1; the answer, taken; its imitation
+            out.append(("help_requests", help_request(1, i - 1, rng)))
+            demo = demonstration(1, i - 1, rng, help_request=1)
             out += [("demonstrations", demo), ("demonstrations_taken", demo)]
         process = 2 if n // 2 <= i < n // 2 + 5 else (1 if i % 4 == 0 else 0)
         out.append(("movements", movement(i, rng, process, status=1 if i % 7 == 0 else 0)))

@@ -45,6 +45,55 @@ def test_bad_demonstrations_are_refused(action, outcome, expected):
     assert kind("demonstrations", demo) == expected
 
 
+@pytest.mark.parametrize("content, action, outcome, expected", [
+    ("goal-only", 0, 2, None), ("means-only", 24, 0, None), ("means-and-goal", 24, 2, None),
+    # a part the content says is not shown, shown all the same: more than the mode gives
+    ("goal-only", 24, 2, "bad-value"), ("means-only", 24, 2, "bad-value"),
+    # a part the content says is shown, missing
+    ("means-and-goal", 0, 2, "size"), ("means-and-goal", 24, 0, "size"),
+    ("goal-only", 0, 3, "size"), ("means-only", 5, 0, "size"),
+    # an unknown content, even with both parts (the field must say what is shown)
+    ("both", 24, 2, "bad-value"), ("", 24, 2, "bad-value"),
+])
+def test_a_demonstration_shows_exactly_what_its_content_says(content, action, outcome,
+                                                              expected):
+    demo = samples.demonstration(1, 30, RNG)
+    demo.content = content
+    demo.action, demo.outcome = RNG.uniform(-1, 1, action), RNG.uniform(-1, 1, outcome)
+    assert kind("demonstrations", demo) == expected
+    assert kind("demonstrations_taken", demo) == expected
+
+
+def test_a_demonstration_from_a_bag_before_the_content_field_showed_both():
+    from types import SimpleNamespace
+
+    from sgim_nodes.bag.records import DemonstrationRecord, to_record
+
+    demo = samples.demonstration(1, 30, RNG)
+    old = SimpleNamespace(**{name: getattr(demo, name) for name in (
+        "stamp", "index", "movement_index", "action", "outcome", "teaching_set_index",
+        "source")})
+    assert kind("demonstrations", old) is None
+    record = to_record(DemonstrationRecord, 5, old)
+    assert (record.content, record.help_request, record.in_memory) == ("means-and-goal", 0,
+                                                                        True)
+    old.action = np.zeros(0)  # an old bag's goal-only demonstration cannot exist
+    assert kind("demonstrations", old) == "size"
+
+
+@pytest.mark.parametrize("change, expected", [
+    ({}, None), ({"index": 0}, "bad-value"), ({"movement_index": 300}, "beyond-budget"),
+    ({"movement_index": 301}, "beyond-budget"), ({"goal": np.zeros(0)}, "size"),
+    ({"goal": np.array([0.2, 1.5])}, "out-of-bounds"),
+    ({"goal": np.array([np.nan, 0.0])}, "non-finite"),
+])
+def test_help_requests_are_checked(change, expected):
+    ask = samples.help_request(1, 150, RNG)
+    for name, value in change.items():
+        setattr(ask, name, value)
+    assert kind("help_requests", ask) == expected
+
+
 @pytest.mark.parametrize("teaching_index, expected", [
     (2**31 - 1, "unknown-teaching-index"), (-7, "unknown-teaching-index"),
     (26, "unknown-teaching-index"), (25, None), (-1, None)])

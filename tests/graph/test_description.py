@@ -148,6 +148,42 @@ def test_bad_values_are_refused_by_name(overrides, message):
         parameters(RunOptions("sgim-d", overrides=overrides))
 
 
+@pytest.mark.parametrize(("learner", "teacher", "overrides", "message"), [
+    ("sgim-d", "human", {"timing": "on-request"}, "needs the automatic teacher"),
+    ("sgim-d", "external", {"timing": "on-request"}, "needs the automatic teacher"),
+    ("demo-only", "automatic", {"timing": "on-request"}, "demo-only attempts no goals"),
+    ("demo-only", "automatic", {"demonstration_content": "goal-only"}, "shows none"),
+    ("sgim-d", "automatic", {"demonstration_content": "both"}, "'demonstration_content'"),
+    ("sgim-d", "automatic", {"timing": "when-asked"}, "'timing'"),
+])
+def test_social_modes_a_run_cannot_play_are_refused_before_it_starts(learner, teacher,
+                                                                     overrides, message):
+    """What the runner refuses (issue 14), the launcher refuses too, before any node starts."""
+    from sgim_nodes.graph.description import RunOptions, parameters
+    from sgim_ros.params import ParameterError
+
+    with pytest.raises(ParameterError, match=message):
+        parameters(RunOptions(learner, teacher=teacher, overrides=overrides))
+
+
+@pytest.mark.parametrize(("learner", "overrides"), [
+    ("sgim-d", {"timing": "on-request", "demonstration_content": "goal-only"}),
+    ("demo-only", {"demonstration_content": "means-only"}),
+    ("saggriac", {"timing": "on-request", "demonstration_content": "goal-only"}),  # no teacher
+])
+def test_social_modes_reach_the_arbiter_and_the_teacher(learner, overrides):
+    from sgim_nodes.graph.description import NODES, RunOptions, parameters
+
+    values = parameters(RunOptions(learner, overrides=overrides))
+    for name, value in overrides.items():
+        assert values.shared[name] == value
+    assert values.for_node(NODES["teacher"])["demonstration_content"] == overrides[
+        "demonstration_content"]
+    if "timing" in overrides:
+        assert values.for_node(NODES["social_interaction"])["timing"] == "on-request"
+        assert values.for_node(NODES["teacher"])["timing"] == "on-request"
+
+
 @pytest.mark.parametrize(("learner", "teacher", "listeners"), [
     ("random", "automatic", "recorder,evaluator,markers"),
     ("saggriac", "automatic", "recorder,evaluator,markers,low_level_explorer"),

@@ -20,10 +20,10 @@ MOVEMENTS, EVAL_EVERY, PERIOD, SEED = 300, 100, 50, 2
 IMITATIONS = LearnerConfig().imitation_count
 
 
-def run_graph(ros_processes, ros_domain, tmp_path, learner, *extra, timeout=300):
+def run_graph(ros_processes, ros_domain, tmp_path, learner, *extra, timeout=300, seed=SEED):
     child = ros_processes.start(
         f"run-{learner}",
-        [RUN, learner, "--seed", str(SEED), "--movements", str(MOVEMENTS), "--eval-every",
+        [RUN, learner, "--seed", str(seed), "--movements", str(MOVEMENTS), "--eval-every",
          str(EVAL_EVERY), "--period", str(PERIOD), "--runs-dir", str(tmp_path), "--name",
          learner, "--domain", str(ros_domain), "--quiet", "--timeout", str(timeout), *extra],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
@@ -46,15 +46,15 @@ def finish(child, tmp_path, learner, timeout=330):
 TOLERANCE = {"sgim-d": 8.0, "demo-only": 0.7}  # in units of the outcome noise (0.07)
 
 
-def run_single_process(learner, **teacher):
+def run_single_process(learner, seed=SEED, **teacher):
     from sgim_nodes.core.learners import make_learner
     from sgim_nodes.core.runner import build_world, run
 
-    world = build_world("fishing", SEED)
-    learner_ = make_learner(learner, world.env.action_dim, world.env.outcome_dim, SEED,
+    world = build_world("fishing", seed)
+    learner_ = make_learner(learner, world.env.action_dim, world.env.outcome_dim, seed,
                             scale=world.scale)
     records: list[dict] = []
-    run(learner_, world, MOVEMENTS, EVAL_EVERY, SEED, records.append, teacher_period=PERIOD,
+    run(learner_, world, MOVEMENTS, EVAL_EVERY, seed, records.append, teacher_period=PERIOD,
         teacher_tolerance_noise=TOLERANCE.get(learner, 1.0), **teacher)
     return records
 
@@ -76,6 +76,132 @@ def test_the_teachers_choice_rule_through_the_graph(ros_processes, ros_domain, t
     moves = [r for r in records if r["type"] == "movement"]
     for graph_move, move in zip(run.movements, moves, strict=True):
         assert np.array_equal(graph_move.action, np.asarray(move["action"])), graph_move.index
+
+
+def social_mode_run(ros_processes, ros_domain, tmp_path, name, seed=SEED, **teacher):
+    """sgim-d through the graph with `teacher` (social modes as --param NAME=VALUE), and the
+    runner's records for the same settings; the graph's movements must be the runner's."""
+    params = [f"tolerance_noise={TOLERANCE['sgim-d']}",
+              *(f"{key}={value}" for key, value in teacher.items())]
+    run = finish(run_graph(ros_processes, ros_domain, tmp_path / name, "sgim-d",
+                           *itertools.chain.from_iterable(("--param", p) for p in params),
+                           seed=seed),
+                 tmp_path / name, "sgim-d")
+    records = run_single_process("sgim-d", seed=seed, **teacher)
+    moves = [r for r in records if r["type"] == "movement"]
+    assert [m.index for m in run.movements] == list(range(1, MOVEMENTS + 1))
+    for graph_move, move in zip(run.movements, moves, strict=True):
+        assert np.array_equal(graph_move.action, np.asarray(move["action"])), graph_move.index
+    evaluations = [r["mean_distance"] for r in records if r["type"] == "evaluation"]
+    assert [e.mean_distance for e in run.evaluations] == pytest.approx(evaluations, abs=1e-12)
+    shown = [(d.movement_index, d.teaching_set_index) for d in run.demonstrations if d.shown]
+    expected = [(r["movement"], r["teaching_index"]) for r in records
+                if r["type"] == "demonstration"]
+    assert shown == expected and len(shown) >= 3
+    return run, records
+
+
+def test_goal_only_demonstrations_through_the_graph(ros_processes, ros_domain, tmp_path):
+    """demonstration_content goal-only (issue 14, emulation): the learner is shown the outcome
+    only, adopts it as its next goal and reaches for it with its own inverse model; no
+    demonstrated action reaches it, its memory or the bag; movements equal the runner's."""
+    from sgim_msgs.msg import Goal, Movement
+    from sgim_nodes.bag.rebuild import rebuild_from_records
+    from sim_bridge.data_files import load_teaching_set
+
+    run, _ = social_mode_run(ros_processes, ros_domain, tmp_path, "goal",
+                             demonstration_content="goal-only")
+    teaching = load_teaching_set()
+    demos = [d for d in run.demonstrations if d.shown]
+    for demo in [*demos, *run.demonstrations_taken]:
+        assert demo.content == "goal-only" and len(demo.action) == 0
+        assert np.array_equal(demo.outcome, teaching.outcomes[demo.teaching_set_index])
+    assert [d.movement_index for d in run.demonstrations_taken] == [
+        d.movement_index for d in demos]
+    # Each one is adopted as a goal at once (Goal mode 4), and that goal attempt is the
+    # learner's own: goal-directed or exploration movements aimed at it, never an imitation.
+    for demo in demos:
+        goal = next(g for g in run.goals if g.movement_index == demo.movement_index)
+        assert goal.mode == Goal.MODE_DEMONSTRATION
+        assert np.array_equal(goal.point, demo.outcome)
+        first = run.movements[demo.movement_index]
+        assert first.goal_index == goal.index and np.array_equal(first.goal, demo.outcome)
+        attempt = next(c for c in run.competences if c.goal_index == goal.index)
+        assert attempt.from_demonstration
+    assert Movement.PROCESS_IMITATION not in {m.process for m in run.movements}
+    # No action the teacher could have shown was ever cast or stored.
+    shown_actions = teaching.actions[[d.teaching_set_index for d in demos]]
+    for move in run.movements:
+        assert not any(np.array_equal(move.action, a) for a in shown_actions)
+    state = rebuild_from_records(run)
+    assert state.n_demonstrations == 0 and "demonstration" not in state.memory.labels
+
+
+def test_means_only_demonstrations_through_the_graph(ros_processes, ros_domain, tmp_path):
+    """demonstration_content means-only: the learner is shown the action only, imitates it and
+    learns where it lands from its own casts; the teacher's outcome never reaches it, its
+    memory or the bag, and it records no competence for a goal it was never given."""
+    from sgim_msgs.msg import Goal, Movement
+    from sgim_nodes.bag.rebuild import rebuild_from_records
+    from sim_bridge.data_files import load_teaching_set
+
+    run, _ = social_mode_run(ros_processes, ros_domain, tmp_path, "means",
+                             demonstration_content="means-only")
+    teaching = load_teaching_set()
+    demos = [d for d in run.demonstrations if d.shown]
+    for demo in [*demos, *run.demonstrations_taken]:
+        assert demo.content == "means-only" and len(demo.outcome) == 0
+        assert np.array_equal(demo.action, teaching.actions[demo.teaching_set_index])
+    for demo in demos:  # imitated at once, aiming at no goal
+        k = demo.movement_index
+        follow = run.movements[k: k + IMITATIONS]
+        assert all(m.process == Movement.PROCESS_IMITATION and len(m.goal) == 0
+                   for m in follow), k
+        assert all(np.linalg.norm(m.action - demo.action) < LearnerConfig().imitation_epsilon
+                   for m in follow)
+    assert not any(c.from_demonstration for c in run.competences)
+    assert Goal.MODE_DEMONSTRATION not in {g.mode for g in run.goals}
+    # What memory holds of the demonstrations is the learner's own casts: no pair labelled a
+    # demonstration, no teaching outcome anywhere in the bag.
+    state = rebuild_from_records(run)
+    assert state.n_demonstrations == 0 and "demonstration" not in state.memory.labels
+    imitations = [m for m in run.movements if m.process == Movement.PROCESS_IMITATION]
+    assert state.memory.labels.count("imitation") == sum(len(m.outcome) > 0
+                                                          for m in imitations)
+    shown_outcomes = teaching.outcomes[[d.teaching_set_index for d in demos]]
+    for outcome in state.memory.outcomes:
+        assert not any(np.array_equal(outcome, y) for y in shown_outcomes)
+
+
+def test_on_request_timing_through_the_graph(ros_processes, ros_domain, tmp_path):
+    """timing on-request: the arbiter asks on help_requests when the core's rule says so, the
+    teacher answers each ask on demonstrations (naming it), both recorded; the asks, the
+    answers and every movement are the runner's, unanswered asks included. Seed 3: asks 5 and
+    6 (movements 200 and 250) come in the middle of a goal attempt, earned at a multiple of
+    P, and the teacher has nothing to show for the second: the attempt ends there all the
+    same, in the runner as in the graph (the arbiter had to stop its job to ask)."""
+    from sgim_msgs.msg import Movement
+
+    run, records = social_mode_run(ros_processes, ros_domain, tmp_path, "asks", seed=3,
+                                   timing="on-request")
+    asks = [(r["movement"], r["goal"]) for r in records if r["type"] == "help_request"]
+    assert [(h.index, h.movement_index) for h in run.help_requests] == [
+        (i, k) for i, (k, _) in enumerate(asks, 1)]
+    for ask, (_, goal) in zip(run.help_requests, asks, strict=True):
+        assert np.array_equal(ask.goal, np.asarray(goal))
+    # One answer per ask, at its count; the teacher speaks at no other time.
+    answers = run.demonstrations
+    assert [(d.help_request, d.movement_index) for d in answers] == [
+        (h.index, h.movement_index) for h in run.help_requests]
+    assert any(not d.shown for d in answers), "an unanswered ask is part of what is tested"
+    budget = len(range(0, MOVEMENTS, PERIOD))
+    assert len(run.help_requests) <= budget
+    assert all(h.index <= h.movement_index // PERIOD + 1 for h in run.help_requests)
+    for demo in (d for d in answers if d.shown):  # shown both parts, imitated at once
+        assert len(demo.action) and len(demo.outcome)
+        k = demo.movement_index
+        assert all(m.process == Movement.PROCESS_IMITATION
+                   for m in run.movements[k: k + IMITATIONS])
 
 
 @pytest.mark.parametrize("learner", ["sgim-d", "saggriac", "random-goals", "demo-only",

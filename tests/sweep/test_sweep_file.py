@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import pytest
 import yaml
 
@@ -74,6 +76,37 @@ def test_a_learner_without_teacher_ignores_period_and_teacher():
     # an integer given to a float parameter is recorded as the float the node reads
     assert saggriac.expected_parameters()["explore_gain"] == 2.0
     assert saggriac.expected_parameters()["teacher"] == "none"
+
+
+def test_social_modes_are_swept_for_the_learners_with_a_teacher_only():
+    runs = expand({"learner": ["sgim-d", "saggriac"], "param": {
+        "timing": ["period", "on-request"],
+        "demonstration_content": ["means-and-goal", "goal-only"],
+        "teacher_choice": "nearest-unreached"}})
+    assert sorted(r.name for r in runs) == [
+        "saggriac-seed0",  # once: it has no teacher, and none of these reach it
+        "sgim-d-demonstration_content=goal-only-teacher_choice=nearest-unreached-seed0",
+        "sgim-d-demonstration_content=goal-only-teacher_choice=nearest-unreached-timing=on-"
+        "request-seed0",
+        "sgim-d-teacher_choice=nearest-unreached-seed0",
+        "sgim-d-teacher_choice=nearest-unreached-timing=on-request-seed0"]
+    saggriac = next(r for r in runs if r.learner == "saggriac")
+    assert "--param" not in saggriac.argv()
+    asks = next(r for r in runs if "timing=on-request" in r.name and "goal-only" in r.name)
+    assert "timing=on-request" in asks.argv() and "demonstration_content=goal-only" in (
+        asks.argv())
+
+
+@pytest.mark.parametrize(("document", "message"), [
+    ({"learner": "demo-only", "param": {"timing": "on-request"}}, "demo-only attempts no goals"),
+    ({"learner": "demo-only", "param": {"demonstration_content": ["means-only", "goal-only"]}},
+     "shows none"),
+    ({"learner": "sgim-d", "teacher": "external", "param": {"timing": "on-request"}},
+     "needs the automatic teacher"),
+])
+def test_social_modes_a_learner_cannot_play_stop_the_sweep(document, message):
+    with pytest.raises(SweepFileError, match=message):
+        expand(document)
 
 
 def test_a_list_is_one_value_when_wrapped():
@@ -163,3 +196,20 @@ def test_shipped_sweep_files_expand():
     for path in SWEEPS.glob("*.yaml"):
         assert load(path).runs, path
         yaml.safe_load(path.read_text())
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["--param", "timing=on-request"], "demo-only: .*demo-only attempts no goals"),
+    (["--learners", "demo-only", "--param", "demonstration_content=goal-only"], "shows none"),
+    (["--param", "timing=sometimes"], "'timing'"),
+])
+def test_run_study_checks_every_param_for_every_learner_first(argv, message, capsys):
+    with pytest.raises(SystemExit):
+        batch.parse_args(argv)
+    assert re.search(message, capsys.readouterr().err)
+
+
+def test_run_study_takes_the_social_modes_its_learners_can_play():
+    args = batch.parse_args(["--learners", "sgim-d", "saggriac", "--param",
+                             "timing=on-request", "--param", "demonstration_content=goal-only"])
+    assert args.param == ["timing=on-request", "demonstration_content=goal-only"]

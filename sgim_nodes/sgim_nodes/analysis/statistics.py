@@ -267,9 +267,11 @@ class DemonstrationTimes:
 
 
 def _shown_demonstrations(run) -> np.ndarray:
-    """The movement counts at which a run was shown a demonstration (the teacher's "nothing to
-    show" turns, recorded with a NaN outcome, left out)."""
-    return np.unique(run.demo_index[np.isfinite(run.demo_outcome).all(axis=1)])
+    """The movement counts at which a run was shown a demonstration: its records are the
+    demonstrations the learner took (RunRecords.learner_demonstrations: the teacher's "nothing
+    to show" turns are never among them), whatever part they showed. A means-only one has no
+    outcome (a NaN row in demo_outcome) and is counted all the same."""
+    return np.unique(run.demo_index)
 
 
 def demonstration_times(study: Study) -> dict[str, DemonstrationTimes]:

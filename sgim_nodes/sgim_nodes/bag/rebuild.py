@@ -6,9 +6,10 @@ drift). Every record is first validated by the reader (bag/validation.py, the li
 checks): a quarantined record is never folded, and the summary says how many there were.
   memory  every successful learner movement, plus every demonstration the learner took (the
           arbiter's `demonstrations_taken`; in a bag recorded before it existed, every
-          non-empty demonstration), in movement-count order; a demonstration taken at count k
-          goes after movement k (it was registered before movement k+1), whatever the order
-          the topics arrived in;
+          non-empty demonstration) that showed both its action and its outcome (a goal-only
+          or means-only one gives memory nothing: the learner stores no pair from it), in
+          movement-count order; a demonstration taken at count k goes after movement k (it
+          was registered before movement k+1), whatever the order the topics arrived in;
   tree    the recorded competences folded into a RegionTree in movement-count order (ties
           keep the recording order), with the LearnerConfig's region parameters.
 The last recorded region map, when there is one, is compared with the rebuilt leaves.

@@ -95,6 +95,30 @@ class DemonstrationRecord:
     outcome: np.ndarray
     teaching_set_index: int
     source: str
+    content: str = "means-and-goal"  # Demonstration.content (bags before it: the paper's)
+    help_request: int = 0  # the HelpRequest.index it answers; 0: none
+
+    @property
+    def shown(self) -> bool:
+        """False for the teacher's "nothing left to show" (empty action and outcome)."""
+        return bool(len(self.action) or len(self.outcome))
+
+    @property
+    def in_memory(self) -> bool:
+        """Whether the learner stores it as an (action, outcome) pair: only when shown both
+        (means-and-goal); a goal-only or means-only demonstration never enters memory."""
+        return bool(len(self.action) and len(self.outcome))
+
+
+@dataclass
+class HelpRequestRecord:
+    """The learner asked its teacher for help (timing on-request, HelpRequest.msg)."""
+
+    time_ns: int
+    stamp_ns: int
+    index: int
+    movement_index: int
+    goal: np.ndarray
 
 
 @dataclass
@@ -138,6 +162,7 @@ class RunRecords:
     region_map: list[RegionMapRecord] = field(default_factory=list)
     demonstrations: list[DemonstrationRecord] = field(default_factory=list)
     demonstrations_taken: list[DemonstrationRecord] = field(default_factory=list)
+    help_requests: list[HelpRequestRecord] = field(default_factory=list)
     evaluations: list[EvaluationRecord] = field(default_factory=list)
     run_status: list[RunStatusRecord] = field(default_factory=list)
     quarantined: list = field(default_factory=list)  # validation.Quarantined
@@ -153,7 +178,7 @@ class RunRecords:
         republished, or, in a bag recorded before it did, every non-empty one."""
         if "demonstrations_taken" in self.topics or self.demonstrations_taken:
             return self.demonstrations_taken
-        return [d for d in self.demonstrations if len(d.action)]
+        return [d for d in self.demonstrations if d.shown]
 
 
 def _rows(flat, size: int) -> np.ndarray:
@@ -187,7 +212,11 @@ def to_record(kind: type, time_ns: int, m) -> object:
                                int(m.goal_count), [_region(r) for r in m.regions])
     if kind is DemonstrationRecord:
         return DemonstrationRecord(t, s, int(m.index), int(m.movement_index), _vec(m.action),
-                                   _vec(m.outcome), int(m.teaching_set_index), str(m.source))
+                                   _vec(m.outcome), int(m.teaching_set_index), str(m.source),
+                                   str(getattr(m, "content", "means-and-goal")),
+                                   int(getattr(m, "help_request", 0)))
+    if kind is HelpRequestRecord:
+        return HelpRequestRecord(t, s, int(m.index), int(m.movement_index), _vec(m.goal))
     if kind is EvaluationRecord:
         return EvaluationRecord(t, s, int(m.movement_index), float(m.mean_distance),
                                 _rows(m.goals, m.outcome_size), _rows(m.reached, m.outcome_size),
@@ -205,6 +234,7 @@ RECORD_TYPES: dict[str, type] = {
     "region_map": RegionMapRecord,
     "demonstrations": DemonstrationRecord,
     "demonstrations_taken": DemonstrationRecord,
+    "help_requests": HelpRequestRecord,
     "evaluations": EvaluationRecord,
     "run_status": RunStatusRecord,
 }

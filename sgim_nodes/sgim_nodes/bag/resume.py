@@ -40,6 +40,7 @@ def records_until(records: RunRecords, count: int) -> RunRecords:
         demonstrations=[d for d in records.demonstrations if d.movement_index < count],
         demonstrations_taken=[d for d in records.demonstrations_taken
                               if d.movement_index < count],
+        help_requests=[h for h in records.help_requests if h.movement_index < count],
         evaluations=[e for e in records.evaluations if e.movement_index <= count],
         topics=set(records.topics),
     )
@@ -55,6 +56,7 @@ class ResumePoint:
     goal_index: int  # the last goal's index
     demonstration_turns: set[int] = field(default_factory=set)  # teacher turns already taken
     demonstrations_given: int = 0  # non-empty demonstrations
+    help_requests_answered: set[int] = field(default_factory=set)  # HelpRequest.index answered
     evaluated: set[int] = field(default_factory=set)
 
     @property
@@ -82,6 +84,8 @@ def resume_point(run_dir: str | Path, config: LearnerConfig | None = None,
         state=state, records=records, count=state.n_movements,
         goal_index=max((g.index for g in records.goals), default=0),
         demonstration_turns={d.movement_index for d in records.demonstrations},
-        demonstrations_given=sum(1 for d in records.demonstrations if len(d.action)),
+        demonstrations_given=sum(1 for d in records.demonstrations if d.shown),
+        help_requests_answered={d.help_request for d in records.demonstrations
+                                if d.help_request},
         evaluated={e.movement_index for e in records.evaluations},
     )

@@ -27,6 +27,7 @@ TOPICS: dict[str, str] = {
     "region_map": f"{PACKAGE}/msg/RegionMap",
     "demonstrations": f"{PACKAGE}/msg/Demonstration",
     "demonstrations_taken": f"{PACKAGE}/msg/Demonstration",
+    "help_requests": f"{PACKAGE}/msg/HelpRequest",
     "evaluations": f"{PACKAGE}/msg/Evaluation",
     "run_status": f"{PACKAGE}/msg/RunStatus",
 }

@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from sgim_nodes.core.environment import PROCESS_CODES, Status
+from sgim_nodes.core.teaching import DEMONSTRATION_CONTENTS, GOAL_ONLY, MEANS_AND_GOAL, MEANS_ONLY
 
 BOUND = 1.0  # actions, outcomes, goals and regions live in [-1, 1]^n
 # Processes and statuses a published Movement may carry: the evaluator's and a human's
@@ -180,15 +181,28 @@ def check_competence(c: Any, limits: Limits) -> Problem | None:
             or _finite(c.competence, "competence", -1.0, 0.0))
 
 
+def demonstration_content(d: Any) -> str:
+    """What a demonstration shows (Demonstration.content); a record from a bag recorded before
+    the field existed has none, and showed both (the paper's SGIM-D)."""
+    return str(getattr(d, "content", MEANS_AND_GOAL))
+
+
 def check_demonstration(d: Any, limits: Limits) -> Problem | None:
-    """An empty action and outcome is the automatic teacher's "nothing left to show"."""
+    """An empty action and outcome is the automatic teacher's "nothing left to show". Otherwise
+    the demonstration shows exactly what its `content` says: both parts (means-and-goal), the
+    outcome and no action (goal-only), or the action and no outcome (means-only)."""
     if str(d.source) not in SOURCES:
         return Problem("bad-value", f"source {str(d.source)!r} is not one of "
                                     f"{', '.join(sorted(SOURCES))}")
+    content = demonstration_content(d)
+    if content not in DEMONSTRATION_CONTENTS:
+        return Problem("bad-value", f"content {content!r} is not one of "
+                                    f"{', '.join(DEMONSTRATION_CONTENTS)}")
     problem = _index_problem(d.movement_index, "movement index", limits)
     if problem:
         return problem
-    if len(_values(d.action)) == 0 and len(_values(d.outcome)) == 0:
+    n_action, n_outcome = len(_values(d.action)), len(_values(d.outcome))
+    if n_action == 0 and n_outcome == 0:
         return None
     k = int(d.teaching_set_index)
     if k < -1 or (limits.teaching_set_size and k >= limits.teaching_set_size):
@@ -198,8 +212,28 @@ def check_demonstration(d: Any, limits: Limits) -> Problem | None:
                        + (f" (0..{size - 1})" if size else ""))
     if int(d.index) < 1:
         return Problem("bad-value", f"demonstration index {int(d.index)} must be >= 1")
-    return (vector_problem(d.action, limits.action_size, "demonstrated action")
-            or vector_problem(d.outcome, limits.outcome_size, "demonstrated outcome"))
+    if content == GOAL_ONLY and n_action:
+        return Problem("bad-value", f"a goal-only demonstration shows no action, got {n_action} "
+                                    "numbers")
+    if content == MEANS_ONLY and n_outcome:
+        return Problem("bad-value", f"a means-only demonstration shows no outcome, got "
+                                    f"{n_outcome} numbers")
+    return ((None if content == GOAL_ONLY else
+             vector_problem(d.action, limits.action_size, "demonstrated action"))
+            or (None if content == MEANS_ONLY else
+                vector_problem(d.outcome, limits.outcome_size, "demonstrated outcome")))
+
+
+def check_help_request(h: Any, limits: Limits) -> Problem | None:
+    """A learner's ask (HelpRequest): a 1-based index, a count within the budget (it asks
+    before a movement, so below it), and the goal it asks about."""
+    if int(h.index) < 1:
+        return Problem("bad-value", f"help request index {int(h.index)} must be >= 1")
+    problem = _index_problem(h.movement_index, "movement index", limits)
+    if problem is None and limits.budget and int(h.movement_index) >= limits.budget:
+        problem = Problem("beyond-budget", f"an ask at movement {int(h.movement_index)}: the "
+                                           f"budget of {limits.budget} is spent")
+    return problem or vector_problem(h.goal, limits.outcome_size, "asked goal")
 
 
 def check_evaluation(e: Any, limits: Limits) -> Problem | None:
@@ -271,6 +305,7 @@ CHECKS = {
     "competences": check_competence,
     "demonstrations": check_demonstration,
     "demonstrations_taken": check_demonstration,
+    "help_requests": check_help_request,
     "evaluations": check_evaluation,
     "run_status": check_run_status,
     "region_map": check_region_map,

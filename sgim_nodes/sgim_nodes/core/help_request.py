@@ -11,6 +11,8 @@ the paper's own measure of progress, eq. 2's competence progress over a sliding 
 - it then asks about the goal of the attempt that has just ended (the goal it is trying to
   reach); the teacher answers with the teaching entry whose outcome lies nearest that goal
   among those the learner has not reached (``teaching.Teacher.answer``);
+- the ask ends the goal attempt under way, answered or not, as the periodic teacher's turn
+  does (the graph's arbiter stops the running job to ask before it knows the answer);
 - after an ask, the window starts afresh: ``window`` new attempts before the next ask, so that
   one stall does not spend the budget at once;
 - the learner earns one ask every ``period`` movements, as the periodic teacher has one turn

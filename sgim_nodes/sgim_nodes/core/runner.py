@@ -205,6 +205,10 @@ def _run(learner: Learner, world: World, movements: int, eval_every: int,
         elif requests is not None and requests.should_ask(i):
             asked = learner.last_attempt_goal
             requests.asked()
+            # The ask ends the goal attempt under way, answered or not, as a teacher's turn
+            # does: the graph's arbiter must stop the running job to ask before it knows
+            # whether the teacher will show anything (nodes/help_asks.py).
+            learner.on_teacher_turn()
             write({"type": "help_request", "movement": i, "ask": requests.asks,
                    "goal": _vec(asked)})
             demo = teacher.answer(asked, learner_progress(teacher_rule, learner.inverse,

@@ -6,6 +6,12 @@ that did not finish is started again from scratch. Progress is shown per run and
 
     ros_ws/run_study.sh                       # 5 learners x 10 seeds x 5000 movements
     ros_ws/run_study.sh --seeds 3 --movements 1000 --parallel 2
+    ros_ws/run_study.sh --learners sgim-d --param timing=on-request --runs-dir runs/asks
+
+Every --param is checked for every learner before any run starts (a social mode a learner
+cannot play, e.g. demo-only with timing on-request, is refused). Run folders are named by
+learner and seed only: give each setting its own --runs-dir (or use a sweep file, whose run
+names carry their settings).
 """
 
 from __future__ import annotations
@@ -24,8 +30,11 @@ from pathlib import Path
 import yaml
 
 from sgim_nodes.core.learners import LEARNER_NAMES
+from sgim_nodes.graph.description import RunOptions, parameters
+from sgim_nodes.graph.overrides import parse_assignments
 from sgim_nodes.graph.processes import ProcessGroup
 from sgim_nodes.graph.run_folder import RunFolderError, RunLock
+from sgim_ros.params import ParameterError
 
 REPO = Path(__file__).resolve().parents[3]
 RUN = REPO / "ros_ws" / "run_experiment.sh"
@@ -81,13 +90,33 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--runs-dir", type=Path, default=REPO / "runs" / "study",
                    help="folder of the study's runs (default: runs/study)")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
-                   help="passed to every run (see run_experiment.sh --help)")
+                   help="passed to every run (see run_experiment.sh --help), e.g. "
+                        "timing=on-request or demonstration_content=goal-only; checked for "
+                        "every learner first. Folders are named by learner and seed only: "
+                        "give each setting its own --runs-dir")
     p.add_argument("--run-timeout", type=float, default=3600,
                    help="abort a run after this many seconds (default: 3600)")
     args = p.parse_args(argv)
     if args.seeds < 1 or args.parallel < 1 or args.movements < 1:
         p.error("--seeds, --parallel and --movements must be >= 1")
+    try:
+        check_params(args.learners, args.param, args.movements, args.eval_every)
+    except ParameterError as error:
+        p.error(str(error))
     return args
+
+
+def check_params(learners: Sequence[str], items: Sequence[str], movements: int,
+                 eval_every: int) -> None:
+    """Every --param as run_experiment will check it, for each learner: ParameterError naming
+    the learner that cannot take it."""
+    assigned, where = parse_assignments(items)
+    for learner in learners:
+        try:
+            parameters(RunOptions(learner, movements=movements, eval_every=eval_every,
+                                  overrides=assigned), where=where)
+        except ParameterError as error:
+            raise ParameterError(f"{learner}: {error}") from None
 
 
 def start(job: Job, args: argparse.Namespace, group: ProcessGroup) -> bool:

@@ -269,6 +269,27 @@ def masked(values: Mapping[str, Any]) -> dict[str, Any]:
     return {k: ("<set>" if v else "") if k in SECRETS else v for k, v in values.items()}
 
 
+def social_mode_problems(options: RunOptions, values: Mapping[str, Any]) -> list[str]:
+    """The social modes (issue 14) a run's learner and teacher cannot play, as the runner
+    refuses them: on-request needs the automatic teacher (it answers the asks) and a learner
+    that attempts goals; demo-only varies demonstrated actions, so a goal-only teacher gives
+    it nothing. Learners without a teacher ignore both settings."""
+    if options.learner not in SOCIAL:
+        return []
+    problems = []
+    if values.get("timing") == "on-request":
+        if options.teacher != "automatic":
+            problems.append("timing 'on-request' needs the automatic teacher (--teacher "
+                            f"automatic), not {options.teacher!r}: it answers the asks")
+        if options.learner == "demo-only":
+            problems.append("timing 'on-request': demo-only attempts no goals, so it never "
+                            "asks (sgim-d does)")
+    if options.learner == "demo-only" and values.get("demonstration_content") == "goal-only":
+        problems.append("demonstration_content 'goal-only': demo-only varies demonstrated "
+                        "actions, and a goal-only demonstration shows none")
+    return problems
+
+
 def parameters(options: RunOptions, node_overrides: Mapping[str, Mapping[str, Any]] | None = None,
                where: Mapping[str, str] | None = None) -> RunParameters:
     """Every value of a run, checked: the learner defaults, the overrides, then the run's own
@@ -297,6 +318,7 @@ def parameters(options: RunOptions, node_overrides: Mapping[str, Mapping[str, An
     problems = []
     try:
         shared = check(values, where)
+        problems += social_mode_problems(options, shared)
     except ParameterError as error:
         problems.append(str(error))
     per_node: dict[str, dict[str, Any]] = {}

@@ -179,7 +179,10 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--storage", choices=STORAGES, help="bag storage (default: mcap)")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                    help="set a node parameter, e.g. --param goal_budget=20 (VALUE is YAML); "
-                        "a name no node declares stops the run before it starts")
+                        "the social modes too: timing=on-request, demonstration_content="
+                        "goal-only or means-only, teacher_choice=farthest-unreached; a name no "
+                        "node declares, or a mode the learner cannot play, stops the run before "
+                        "it starts")
     p.add_argument("--params-file", action="append", default=[], type=Path, metavar="FILE",
                    help="a ROS parameter file: sections /** (every node) or a node's name, "
                         "each holding ros__parameters; checked like --param, which wins")

@@ -6,7 +6,8 @@ touches the learner's memory or simulator, and sees exactly the memory the learn
 movement N. Evaluations happen at exactly 0, every multiple of `eval_every`, and the run's
 budget (`movements`, or, when it is 0, the budget a valid run_status announces). Its memory
 holds the valid learner movements and the demonstrations the learner took
-(`demonstrations_taken`): a demonstration offered but refused never reaches it.
+(`demonstrations_taken`) shown whole: a demonstration offered but refused never reaches it,
+nor does a goal-only or means-only one (the learner stores no pair from it).
 
 Interfaces:
   subscribes  movements, demonstrations_taken, run_status
@@ -97,7 +98,7 @@ class EvaluatorNode(Node):
     def _on_demo(self, msg: Demonstration) -> None:
         if self.gate.check("demonstrations_taken", msg):
             return
-        if len(msg.action):
+        if len(msg.action) and len(msg.outcome):  # goal- or means-only: not in memory
             self.memory.add_demonstration_after(msg.movement_index, vec(msg.action),
                                                 vec(msg.outcome))
 

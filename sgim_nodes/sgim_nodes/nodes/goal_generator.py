@@ -9,7 +9,9 @@ Interfaces:
   publishes   goals       (sgim_msgs/Goal)
   serves      choose_goal (sgim_msgs/srv/ChooseGoal)
 Parameters: the common ones, p_mode1..3 and mode3_radius_noise of LearnerConfig, map_timeout.
-The random-goals learner draws every goal uniformly (mode 2).
+The random-goals learner draws every goal uniformly (mode 2). A request that names a
+`demonstrated` outcome (a goal-only demonstration, issue 14) adopts it as the goal
+(MODE_DEMONSTRATION), drawing nothing, as the single-process learner adopts it.
 """
 
 from __future__ import annotations
@@ -27,11 +29,13 @@ from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.core.region_snapshot import RegionSnapshot
 from sgim_nodes.nodes.ros_glue import (
     AsyncNode,
+    check_vector,
     declare_learner,
     floats,
     learner_node_params,
     run_node,
     snapshot_from_msg,
+    vec,
     world_scale,
 )
 from sgim_ros import qos
@@ -50,6 +54,7 @@ class GoalGenerator(AsyncNode):
         super().__init__("goal_generator")
         values, c = declare_learner(self, PARAMS)
         self.timeout = values["map_timeout"]
+        self.outcome_size = values["outcome_size"]
         self.rng = component_rng(values["seed"], "goals")
         self.probabilities = goal_mode_probabilities(c, values["learner"])
         self.radius = c.distances(world_scale(values)).mode3_radius
@@ -89,13 +94,22 @@ class GoalGenerator(AsyncNode):
                                     "running?")
                 return response
         snap = self.snapshot
-        choice = GoalSelector(snap, self.probabilities, self.radius).sample(self.rng)
+        if len(request.demonstrated):
+            why = check_vector(request.demonstrated, self.outcome_size, "demonstrated goal",
+                               bound=1.0)
+            if why:
+                response.ok, response.message = False, why
+                return response
+            point, mode = vec(request.demonstrated), Goal.MODE_DEMONSTRATION
+        else:
+            choice = GoalSelector(snap, self.probabilities, self.radius).sample(self.rng)
+            point, mode = choice.goal, MODE_CODES[choice.mode]
         self.goal_count += 1
-        leaf = next((r for r in snap.leaves if np.all(choice.goal >= r.low)
-                     and np.all(choice.goal <= r.high)), None)
+        leaf = next((r for r in snap.leaves if np.all(point >= r.low)
+                     and np.all(point <= r.high)), None)
         goal = Goal(stamp=self.get_clock().now().to_msg(), index=self.goal_count,
-                    movement_index=request.movement_index, point=floats(choice.goal),
-                    region_id=-1 if leaf is None else leaf.id, mode=MODE_CODES[choice.mode])
+                    movement_index=request.movement_index, point=floats(point),
+                    region_id=-1 if leaf is None else leaf.id, mode=mode)
         self._goals.publish(goal)
         response.ok, response.goal = True, goal
         return response

@@ -2,8 +2,9 @@
 
 Each `imitate` job is one core Imitation (a_demo + a_rand, |a_rand| < imitation_epsilon)
 driven movement by movement through the simulator's `execute_action` service, recorded as
-imitation movements aimed at the demonstrated outcome. A cancel is honoured at the next
-movement boundary.
+imitation movements aimed at the demonstrated outcome. A means-only demonstration (issue 14)
+comes without its outcome: its imitation aims at no goal (the movements' goal is empty) and
+has no best outcome, as the core's. A cancel is honoured at the next movement boundary.
 
 Interfaces:
   subscribes  movements      (sgim_msgs/Movement; validated: the run's count, to refuse a job
@@ -63,7 +64,8 @@ class ImitationNode(AsyncNode):
         request: Imitate.Goal = handle.request
         result = Imitate.Result(best_distance=float("inf"))
         why = (check_vector(request.action, self.action_size, "demonstrated action", 1.0)
-               or check_vector(request.outcome, self.outcome_size, "demonstrated outcome"))
+               or (check_vector(request.outcome, self.outcome_size, "demonstrated outcome")
+                   if len(request.outcome) else ""))
         count = self.gate.movements.count
         if not why and request.movements_before < count:
             why = (f"the job starts after movement {request.movements_before}, but the run is "
@@ -73,7 +75,8 @@ class ImitationNode(AsyncNode):
             handle.abort()
             return result
         count = request.repetitions or self.config.imitation_count
-        job = Imitation(vec(request.action), vec(request.outcome), count,
+        goal = vec(request.outcome) if len(request.outcome) else None  # None: means-only
+        job = Imitation(vec(request.action), goal, count,
                         self.config.imitation_epsilon, self.rng)
         while not job.done:
             if handle.is_cancel_requested:

@@ -5,7 +5,9 @@ executed through the simulator's `execute_action` service, and the job waits unt
 movement has come back on the `movements` stream into its memory before the next step, as the
 single-process learner would. A cancel (the arbiter preempting for a demonstration) is
 honoured at the next movement boundary; the movement under way always completes. The
-attempt's competence is published on `competences` whenever it spent a movement.
+attempt's competence is published on `competences` whenever it spent a movement (marked
+from_demonstration for a demonstrated outcome adopted as a goal: a goal-only demonstration);
+the result says whether the attempt ended by itself or was cut.
 
 Interfaces:
   subscribes  movements              (sgim_msgs/Movement)
@@ -114,6 +116,7 @@ class LowLevelExplorer(AsyncNode):
             handle.publish_feedback(ReachGoal.Feedback(movements_done=used,
                                                        best_distance=attempt.best_distance))
         result.movements_used = used
+        result.finished = attempt.done
         result.reached = floats(attempt.best_outcome)
         if attempt.best_outcome is not None:
             reference = (attempt.start_distance
@@ -127,7 +130,7 @@ class LowLevelExplorer(AsyncNode):
                 stamp=self.get_clock().now().to_msg(), goal_index=request.goal_index,
                 movement_index=request.movements_before + used, goal=floats(goal),
                 reached=result.reached, competence=result.competence, movements_used=used,
-                from_demonstration=False))
+                from_demonstration=request.demonstrated))
         return result
 
 

@@ -15,7 +15,15 @@ the teacher's boundaries, then waits for its word (a demonstration, or an empty 
 nothing left to show), which makes a run reproducible; with a human teacher demonstrations come
 at any time and the running job is cancelled, honoured at its next movement boundary; a human
 teacher can also pause, resume and step the run and be given a turn every P movements
-(`wait_for_teacher`; see pace.py).
+(`wait_for_teacher`; see pace.py). With `timing: on-request` (issue 14) the automatic teacher
+has no boundaries: the learner asks for help on `help_requests` when its progress stalls
+(help_asks.py, the core's rule) and waits for the teacher's answer.
+
+What a demonstration shows (its `content`, core/teaching.py) decides what the learner does
+with it, as the single-process learner does: both parts (the paper's) are registered in the
+explorer's memory and imitated; a goal-only one is adopted as the next goal (choose_goal names
+it, Goal.MODE_DEMONSTRATION) and reached like any goal, its action never known; a means-only
+one is imitated without a goal, nothing stored, no competence.
 
 The budget is exact: an imitation is cut to the movements left, and a demonstration that is
 invalid (bag/validation.py: sizes, bounds, a known teaching-set index) or comes once the
@@ -26,11 +34,12 @@ which it entered the learner's memory: the evaluator and the bag readers use tho
 Interfaces:
   subscribes  demonstrations (Demonstration), evaluations (Evaluation)
   publishes   competences (Competence, for demonstrated goals), run_status (RunStatus),
-              demonstrations_taken (Demonstration), pace_state (PaceState; human teacher only)
+              demonstrations_taken (Demonstration), pace_state (PaceState; human teacher only),
+              help_requests (HelpRequest; timing on-request only)
   serves      pace (Pace; human teacher only)
   clients of  choose_goal, register_demonstration, execute_action; actions reach_goal, imitate
 Parameters: the common ones, every LearnerConfig field, movements, teacher,
-demonstration_period, wait_for_teacher, wait_for_evaluation, wait_for_recorder, timeouts.
+demonstration_period, timing, wait_for_teacher, wait_for_evaluation, wait_for_recorder, timeouts.
 """
 
 from __future__ import annotations
@@ -50,8 +59,11 @@ from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.bag.types import RECORDED_TOPICS as RECORD_TOPICS
 from sgim_nodes.bag.validation import Limits, LiveGate, teaching_set_size
 from sgim_nodes.core.competence import competence
+from sgim_nodes.core.help_request import DEFAULT_TIMING, ON_REQUEST, TIMINGS
 from sgim_nodes.core.learners import GOAL_BABBLERS
 from sgim_nodes.core.random_streams import component_rng
+from sgim_nodes.core.teaching import GOAL_ONLY, MEANS_ONLY
+from sgim_nodes.nodes.help_asks import HelpAsks
 from sgim_nodes.nodes.pace import FOREVER, PaceControl
 from sgim_nodes.nodes.ros_glue import (
     AsyncNode,
@@ -65,15 +77,19 @@ from sgim_nodes.nodes.ros_glue import (
 from sgim_nodes.nodes.sim_client import SIM_CLIENT_PARAMS, SimClient, SimulatorError
 from sgim_ros import qos
 from sgim_ros.entry import first_of
-from sgim_ros.params import Param, at_least, non_negative, one_of, positive
+from sgim_ros.params import Param, ParameterError, at_least, non_negative, one_of, positive
 
 SOCIAL = ("sgim-d", "demo-only")
 PARAMS = learner_node_params(
     Param("movements", 5000, "the run's movement budget (the paper: 5000)", at_least(1)),
     Param("teacher", "automatic", "who gives demonstrations: automatic (synchronous at its "
           "period), human (any time), none", one_of("automatic", "human", "none")),
-    Param("demonstration_period", 150, "the automatic teacher's period P (paper: 150)",
-          at_least(1)),
+    Param("demonstration_period", 150, "the automatic teacher's period P (paper: 150); "
+          "on-request, the learner earns one ask per P movements", at_least(1)),
+    Param("timing", DEFAULT_TIMING, "when the automatic teacher speaks: 'period' (every "
+          "demonstration_period movements, the paper) or 'on-request' (sgim-d asks on "
+          "help_requests when its progress stalls); the teacher's must be the same; "
+          "core/help_request.py", one_of(*TIMINGS)),
     Param("wait_for_teacher", 0.0, "human teacher: seconds the run waits for a demonstration "
           f"every demonstration_period movements (0: never waits, {FOREVER:g}: until the "
           "teacher acts)", lambda v: v >= 0 or v == FOREVER, f">= 0 or {FOREVER:g}"),
@@ -96,6 +112,11 @@ PARAMS = learner_node_params(
 )
 
 
+def shown(demo: Demonstration) -> bool:
+    """False for the automatic teacher's "nothing left to show" (empty action and outcome)."""
+    return bool(len(demo.action) or len(demo.outcome))
+
+
 class RunAborted(RuntimeError):
     """The run cannot go on (a node is missing or silent); the message says which."""
 
@@ -108,8 +129,16 @@ class SocialInteraction(AsyncNode):
         self.learner = values["learner"]
         self.total = values["movements"]
         social = self.learner in SOCIAL and values["teacher"] != "none"
+        self.automatic = social and values["teacher"] == "automatic"
+        on_request = social and values["timing"] == ON_REQUEST
+        if on_request and not self.automatic:
+            raise ParameterError("timing 'on-request' needs the automatic teacher (teacher: "
+                                 "automatic): it answers the learner's help requests")
+        if on_request and self.learner == "demo-only":
+            raise ParameterError("demo-only attempts no goals, so it never asks: timing "
+                                 "'on-request' needs sgim-d")
         self.sync_period = values["demonstration_period"] if (
-            social and values["teacher"] == "automatic") else 0
+            self.automatic and not on_request) else 0
         self.social = social
         self.distances = self.config.distances(world_scale(values))
         self.rng = component_rng(values["seed"], "random")
@@ -127,6 +156,8 @@ class SocialInteraction(AsyncNode):
         self._started = time.monotonic()
         self._last_log = 0
 
+        self.asks = (HelpAsks(self, self.total, values["demonstration_period"])
+                     if on_request else None)
         self.pace = None  # pause, step and teacher turns: for a human teacher only
         if social and values["teacher"] == "human":
             self.pace = PaceControl(self, self.total, values["demonstration_period"],
@@ -156,12 +187,15 @@ class SocialInteraction(AsyncNode):
         self.goals_folded = point.state.n_competences
         self.turns_taken = set(point.demonstration_turns)
         self.evaluated = set(point.evaluated)
+        if self.asks is not None:
+            self.asks.resume(point.records, point.count)
         demo = point.latest_demonstration
         if demo is not None and self.learner == "demo-only":
             self.latest_demo = Demonstration(
                 index=demo.index, movement_index=demo.movement_index,
                 action=floats(demo.action), outcome=floats(demo.outcome),
-                teaching_set_index=demo.teaching_set_index, source=demo.source)
+                teaching_set_index=demo.teaching_set_index, source=demo.source,
+                content=demo.content, help_request=demo.help_request)
         self.get_logger().info(f"resuming at movement {self.count}/{self.total}")
 
     # --- events -------------------------------------------------------------------------
@@ -172,16 +206,32 @@ class SocialInteraction(AsyncNode):
         if problem is not None:
             self._refuse(msg, problem.detail)
             return
-        if self.sync_period and msg.source == "automatic":
-            self.boundary_word[msg.movement_index] = msg
-        elif self.count >= self.total and len(msg.action):
+        if self.automatic and msg.source == "automatic":
+            why = self._automatic_word(msg)
+            if why:
+                self._refuse(msg, why, always=True)
+        elif self.count >= self.total and shown(msg):
             self._refuse(msg, f"it came after the movement budget of {self.total} was spent",
                          always=True)
-        elif len(msg.action):
+        elif shown(msg):
             self.pending.append(msg)
             if self._job is not None:  # preempt: honoured at the job's next movement boundary
                 self._job.cancel_goal_async()
         self._wake()
+
+    def _automatic_word(self, msg: Demonstration) -> str:
+        """File the automatic teacher's word: at its boundary (period) or as the answer to an
+        ask (on-request); '' or why it is refused (a teacher of the other timing)."""
+        if self.asks is None:
+            if msg.help_request:
+                return ("it answers a help request, but this learner's timing is 'period': "
+                        "the teacher's timing must be the same")
+            self.boundary_word[msg.movement_index] = msg
+            return ""
+        if not msg.help_request:
+            return ("it answers no help request, but this learner's timing is 'on-request': "
+                    "the teacher's timing must be the same")
+        return self.asks.answered(msg)
 
     def _on_evaluation(self, msg: Evaluation) -> None:
         if self.gate.check("evaluations", msg):
@@ -259,7 +309,7 @@ class SocialInteraction(AsyncNode):
                 await first_of(self, Future(), 0.1)
         # The evaluator and the automatic teacher must hear the start too.
         publishers = ["evaluations"] if self.p["wait_for_evaluation"] else []
-        if self.sync_period:
+        if self.automatic:
             publishers.append("demonstrations")
         for topic in publishers:
             while self.count_publishers(topic) < 1:
@@ -286,7 +336,7 @@ class SocialInteraction(AsyncNode):
             listeners.append(("explorer_ready", "the low_level_explorer node"))
         if self.social:
             listeners.append(("imitation_ready", "the imitation node"))
-        if self.sync_period:
+        if self.automatic:
             listeners.append(("teacher_ready", "the teacher node"))
         return listeners
 
@@ -341,18 +391,17 @@ class SocialInteraction(AsyncNode):
                                   self.p["teacher_timeout"],
                                   f"the teacher's word at movement {self.count}")
                 word = self.boundary_word.pop(self.count)
-                if len(word.action):
+                if shown(word):
                     await self._take_demonstration(word)
+                continue
+            if self.asks is not None and self.asks.should_ask(self.count):
+                await self._ask_for_help()
                 continue
             if self.pending:
                 await self._take_demonstration(self.pending.popleft())
                 self._paced()
                 continue
-            cap = self.total - self.count
-            if self.sync_period:
-                cap = min(cap, self.sync_period - self.count % self.sync_period)
-            if self.pace is not None:
-                cap = min(cap, self.pace.cap(cap))
+            cap = self._cap()
             if self.learner in GOAL_BABBLERS:
                 await self._goal_attempt(cap)
             elif self.learner == "demo-only" and self.latest_demo is not None:
@@ -361,6 +410,30 @@ class SocialInteraction(AsyncNode):
                 await self._random_movement()
             self._paced()
             self._progress()
+
+    def _cap(self) -> int:
+        """Movements the next goal attempt may make: to the budget, the teacher's next
+        boundary, a human's pause or step, or where a stalled learner earns its next ask."""
+        cap = self.total - self.count
+        if self.sync_period:
+            cap = min(cap, self.sync_period - self.count % self.sync_period)
+        if self.pace is not None:
+            cap = min(cap, self.pace.cap(cap))
+        if self.asks is not None:
+            cap = self.asks.cap(self.count, cap)
+        return cap
+
+    async def _ask_for_help(self) -> None:
+        """Ask the teacher (help_requests) and wait for its answer, as at a boundary."""
+        ask = self.asks.ask(self.count)
+        self.get_logger().info(f"help request {ask.index} at movement {self.count} (goal "
+                               f"{[round(x, 3) for x in ask.goal]})")
+        await self._until(lambda i=ask.index: i in self.asks.answers, self.p["teacher_timeout"],
+                          f"the teacher's answer to help request {ask.index} at movement "
+                          f"{self.count}")
+        word = self.asks.answers.pop(ask.index)
+        if shown(word):
+            await self._take_demonstration(word)
 
     def _paced(self) -> None:
         if self.pace is not None:
@@ -371,10 +444,23 @@ class SocialInteraction(AsyncNode):
             self._refuse(demo, f"the movement budget of {self.total} is spent")
             return
         self.get_logger().info(f"demonstration {demo.index} at movement {self.count} "
-                               f"(outcome {floats(demo.outcome)})")
+                               f"({demo.content}, outcome {floats(demo.outcome)})")
         if self.learner == "demo-only":
+            if demo.content == GOAL_ONLY:
+                self._refuse(demo, "demo-only varies demonstrated actions: a goal-only "
+                             "demonstration shows none", always=True)
+                return
             self.latest_demo = demo
             self._publish_taken(demo)
+            return
+        if demo.content == GOAL_ONLY:  # emulation: the outcome becomes the next goal
+            self._publish_taken(demo)
+            await self._goal_attempt(self._cap(), demonstrated=demo.outcome)
+            return
+        if demo.content == MEANS_ONLY:  # the action, imitated; where it lands, seen by itself
+            self._publish_taken(demo)
+            await self._imitation(demo, min(self.config.imitation_count,
+                                            self.total - self.count))
             return
         reply = await self._call(self.register_client,
                                  RegisterDemonstration.Request(demonstration=demo),
@@ -403,16 +489,22 @@ class SocialInteraction(AsyncNode):
                 from_demonstration=True))
             self.goals_folded += 1
 
-    async def _goal_attempt(self, cap: int) -> None:
+    async def _goal_attempt(self, cap: int, demonstrated=()) -> None:
+        """A goal drawn by the goal generator, or the `demonstrated` outcome adopted."""
         reply = await self._call(self.goal_client, ChooseGoal.Request(
-            movement_index=self.count, min_goal_count=self.goals_folded), "choose_goal")
+            movement_index=self.count, min_goal_count=self.goals_folded,
+            demonstrated=list(demonstrated)), "choose_goal")
         if not reply.ok:
             raise RunAborted(f"goal generator: {reply.message}")
         result = await self._action(self.reach, ReachGoal.Goal(
             goal=reply.goal.point, goal_index=reply.goal.index, max_movements=cap,
-            movements_before=self.count), "reach_goal")
+            movements_before=self.count, demonstrated=bool(len(demonstrated))),
+            "reach_goal")
         if result.movements_used > 0:
             self.goals_folded += 1
+        if self.asks is not None:
+            self.asks.attempt_ended(vec(reply.goal.point), result.movements_used,
+                                    result.competence, result.finished, self.count)
 
     async def _imitation(self, demo: Demonstration, repetitions: int) -> Imitate.Result:
         return await self._action(self.imitate, Imitate.Goal(
@@ -462,7 +554,8 @@ class SocialInteraction(AsyncNode):
         self._taken.publish(Demonstration(
             stamp=self.get_clock().now().to_msg(), index=demo.index, movement_index=self.count,
             action=demo.action, outcome=demo.outcome,
-            teaching_set_index=demo.teaching_set_index, source=demo.source))
+            teaching_set_index=demo.teaching_set_index, source=demo.source,
+            content=demo.content, help_request=demo.help_request))
 
     def _refuse(self, demo: Demonstration, why: str, always: bool = False) -> None:
         """A demonstration the learner does not take: said in the log and on run_status

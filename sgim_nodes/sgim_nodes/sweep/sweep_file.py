@@ -14,11 +14,14 @@
 A list is swept; to pass a list as one value, wrap it: ``[[1, 2]]``. Every parameter value, and
 every combination of them, is checked as run_experiment checks it (graph/description.py), so a
 misspelt name or a bad value stops the sweep before any run starts. A run of a learner without
-a teacher (saggriac, random-goals, random) ignores ``period`` and ``teacher``, so those runs are
-made once, not once per P. Runs are named ``<learner>[-P<p>][-<name>=<value>...]-seed<N>``
-from the settings that differ from run_experiment's and learner.yaml's defaults, so the
-paper's default runs keep ``run_study.sh``'s names (``sgim-d-seed3``) and a sweep file can
-grow new blocks without renaming the runs already done.
+a teacher (saggriac, random-goals, random) ignores ``period``, ``teacher`` and the teacher's
+parameters (``teacher_choice``, ``demonstration_content``, ``timing``, ...), so those runs are
+made once, not once per P or per social mode; a social mode a learner cannot play (demo-only
+with ``timing: on-request`` or goal-only demonstrations) stops the sweep before any run.
+Runs are named ``<learner>[-P<p>][-<name>=<value>...]-seed<N>`` from the settings that differ
+from run_experiment's and learner.yaml's defaults, so the paper's default runs keep
+``run_study.sh``'s names (``sgim-d-seed3``) and a sweep file can grow new blocks without
+renaming the runs already done.
 """
 
 from __future__ import annotations
@@ -40,8 +43,12 @@ from sgim_nodes.graph.description import (
     OPTION_PARAMETERS,
     SOCIAL,
     STORAGES,
+    RunOptions,
     check,
+    graph,
     learner_defaults,
+    social_mode_problems,
+    unused,
 )
 from sgim_nodes.graph.experiment import REPO
 from sgim_ros.params import ParameterError
@@ -223,6 +230,13 @@ def _check_block(block: Any, where: str) -> dict[str, Any]:
     return dict(block)
 
 
+def teacher_parameters(learner: str, names: Iterable[str]) -> set[str]:
+    """The names a learner without a teacher never reads: those no node of its graph declares
+    (the teacher's), and the arbiter's `timing`, which only a social learner's reads."""
+    names = list(names)
+    return set(unused(names, graph(learner))) | ({"timing"} & set(names))
+
+
 def _expand_block(block: dict[str, Any], where: str) -> Iterable[RunSpec]:
     if "learner" not in block:
         raise SweepFileError(f"{where}: no learner (give 'learner' at the top or in the block)")
@@ -266,9 +280,14 @@ def _expand_block(block: dict[str, Any], where: str) -> Iterable[RunSpec]:
                               axes["storage"], axes["period"], axes["teacher"],
                               itertools.product(*values))):
         social = learner in SOCIAL
+        problems = social_mode_problems(RunOptions(learner, teacher=teacher),
+                                        checked_params(zip(names, chosen, strict=True)))
+        if problems:
+            raise SweepFileError(f"{where}: {learner}: {'; '.join(problems)}")
+        ignored = set() if social else teacher_parameters(learner, names)
         # A parameter at its learner.yaml default is the default run: one spec, one name.
-        given = tuple((n, t) for n, t in zip(names, chosen, strict=True)
-                      if n not in defaults or checked_params([(n, t)])[n] != defaults[n])
+        given = tuple((n, t) for n, t in zip(names, chosen, strict=True) if n not in ignored
+                      and (n not in defaults or checked_params([(n, t)])[n] != defaults[n]))
         spec = RunSpec(learner, seed, movements, eval_every, period if social else None,
                        teacher if social else None, storage, given)
         yield RunSpec(**{**spec.__dict__, "name": run_name(spec)})
