@@ -7,10 +7,13 @@ evaluation world with its own seed (both models in worlds of the same seed, as t
 does), to see how often the 2-cast verdict flips and how large the gap is against its own
 spread. The actions of both models are computed once: only the casts' noise differs between
 repeats. A third model, ours without its local-linear step (the candidate it ranks best,
-that pair's own action), tells the ranking's share of the gap from the step's.
+that pair's own action), tells the ranking's share of the gap from the step's, and a fourth,
+ours without the gate on the fits it steps along (``local_min_casts`` 0), the gate's share.
+``--learn-set NAME=VALUE`` changes the learning run's LearnerConfig (e.g. local_min_casts=0 to
+learn the memory the way the learner did before the gate).
 
 Run: PYTHONPATH=sgim_nodes:sim_bridge .venv/bin/python benchmarks/measure_same_memory.py \\
-         --learner saggriac --seed 0 --movements 2000 --repeats 10
+         --learner saggriac --seed 0 --movements 2000 --repeats 10 [--learn-set NAME=VALUE]
 """
 
 from __future__ import annotations
@@ -31,6 +34,9 @@ from sgim_nodes.core.inverse_model import InverseModel  # noqa: E402
 from sgim_nodes.core.learners import inverse_model_for, make_learner  # noqa: E402
 from sgim_nodes.core.runner import build_world, run  # noqa: E402
 
+sys.path.insert(0, str(REPO / "benchmarks"))
+from bench_learners import parse_set  # noqa: E402
+
 
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -40,18 +46,22 @@ def main() -> int:
     p.add_argument("--movements", type=int, default=2000)
     p.add_argument("--repeats", type=int, default=10)
     p.add_argument("--casts", type=int, default=2, help="casts per goal and repeat (bench: 2)")
+    p.add_argument("--learn-set", action="append", default=[], metavar="NAME=VALUE",
+                   help="a LearnerConfig value for the learning run (repeatable)")
     a = p.parse_args()
     start = time.perf_counter()
     world = build_world(a.world, a.seed)
     learner = make_learner(a.learner, world.env.action_dim, world.env.outcome_dim, a.seed,
-                           LearnerConfig(), world.scale)
+                           LearnerConfig(**parse_set(a.learn_set)), world.scale)
     run(learner, world, a.movements, 0, a.seed, lambda record: None)
-    ours = inverse_model_for(learner.memory, learner.config)
+    ours = inverse_model_for(learner.memory, LearnerConfig())  # the default inverse model
     # ours without its local-linear step: the candidate it ranks best, that pair's own action
     unmoved = InverseModel(learner.memory, "local-linear", ours.l_max, ours.k_max, ours.alpha,
                            ours.local_radius, ours.local_neighbours, 1e-12)
+    ungated = InverseModel(learner.memory, "local-linear", ours.l_max, ours.k_max, ours.alpha,
+                           ours.local_radius, ours.local_neighbours, ours.local_step, 0.0)
     models = {"ours": ours, "nearest": InverseModel(learner.memory, "nearest"),
-              "ours-no-step": unmoved}
+              "ours-no-step": unmoved, "ours-no-gate": ungated}
     actions = {label: {tuple(g): np.asarray(m(g), float) for g in world.goals}
                for label, m in models.items()}
     same = np.mean([np.array_equal(actions["ours"][k], actions["nearest"][k])
@@ -70,18 +80,21 @@ def main() -> int:
             if hasattr(fresh.env, "close"):
                 fresh.env.close()
                 fresh.eval_env.close()
-        rows.append((out["ours"], out["nearest"], out["ours-no-step"]))
+        rows.append((out["ours"], out["nearest"], out["ours-no-step"], out["ours-no-gate"]))
         print(f"  repeat {r}: ours {out['ours']:.4f}, nearest {out['nearest']:.4f}, "
               f"ours - nearest {out['ours'] - out['nearest']:+.4f}; "
-              f"ours without its step {out['ours-no-step']:.4f}")
+              f"ours without its step {out['ours-no-step']:.4f}, "
+              f"without the gate {out['ours-no-gate']:.4f}")
         sys.stdout.flush()
-    o, n, u = np.array(rows).T
+    o, n, u, g = np.array(rows).T
     d = o - n
     print(f"over {a.repeats} repeats of {a.casts} casts per goal: ours {o.mean():.4f}, "
           f"nearest {n.mean():.4f}; ours - nearest {d.mean():+.4f} (sd {d.std(ddof=1):.4f} "
           f"per repeat); ours no worse in {int(np.sum(d <= 0))}/{a.repeats} repeats "
           f"({time.perf_counter() - start:.0f} s)")
-    print(f"ours without its step {u.mean():.4f} (ours - it {np.mean(o - u):+.4f})")
+    print(f"ours without its step {u.mean():.4f} (ours - it {np.mean(o - u):+.4f}); "
+          f"ours without the gate {g.mean():.4f} (minus nearest {np.mean(g - n):+.4f}, no worse "
+          f"in {int(np.sum(g <= n))}/{a.repeats} repeats)")
     return 0
 
 
