@@ -246,9 +246,13 @@ class _Deserializer:
         self.store: Typestore = get_typestore(Stores.ROS2_JAZZY)
 
     def __call__(self, record: RawRecord) -> object:
+        return self.store_for(record).deserialize_cdr(record.data, record.msgtype)
+
+    def store_for(self, record: RawRecord) -> Typestore:
+        """The typestore that holds the record's type as the bag defines it."""
         if record.msgtype not in self.store.types:
             self._register(record)
-        return self.store.deserialize_cdr(record.data, record.msgtype)
+        return self.store
 
     def _register(self, record: RawRecord) -> None:
         types: dict = {}
