@@ -121,3 +121,13 @@ def test_a_type_that_no_longer_exists_is_refused_naming_topic_and_type(tmp_path,
     assert main([str(bag), "--quiet"]) == 2
     out = capsys.readouterr().err
     assert "/casts" in out and "sgim_msgs/msg/Cast no longer exists" in out, out
+
+
+def test_a_damaged_recorded_definition_is_refused_naming_topic_and_type(tmp_path):
+    from dataclasses import replace
+
+    bag = samples.write_bag(tmp_path / "new", samples.synthetic_run(5))
+    record = next(r for r in read_raw(bag) if r.topic == "/movements")
+    with pytest.raises(SchemaError, match="/movements: the recorded definition of "
+                                          "sgim_msgs/msg/Movement is unreadable"):
+        Upgrader().upgrade(replace(record, msgdef="uint64 index\nfloat64[ broken"))

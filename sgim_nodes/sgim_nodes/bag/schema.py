@@ -24,7 +24,7 @@ from rosbags.interfaces import Nodetype
 from rosbags.typesys.base import normalize_fieldname
 from rosbags.typesys.store import Typestore
 
-from sgim_nodes.bag.reader import RawRecord, _Deserializer
+from sgim_nodes.bag.reader import NotABagError, RawRecord, _Deserializer
 from sgim_nodes.bag.records import RECORD_TYPES
 from sgim_nodes.bag.types import TOPICS, typestore
 
@@ -97,7 +97,14 @@ class Upgrader:
                               "exists: this bag cannot be replayed as today's messages")
         if not record.msgdef:  # a bag written without definitions is read with today's
             return True
-        recorded = self._recorded.setdefault(record.msgdef, _Deserializer()).store_for(record)
+        try:
+            recorded = self._recorded.setdefault(record.msgdef, _Deserializer()
+                                                 ).store_for(record)
+        except NotABagError:
+            raise
+        except Exception as error:  # a damaged definition: nothing to convert with
+            raise SchemaError(f"{record.topic}: the recorded definition of {record.msgtype} "
+                              f"is unreadable: {error}") from None
         try:
             return _same_type(recorded, self.current, record.msgtype, "")
         except _Incompatible as error:
