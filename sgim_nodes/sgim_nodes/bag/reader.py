@@ -6,7 +6,8 @@ file. Analysis should get everything that is readable, with a warning naming eac
 to skip, rather than nothing. Each storage file is therefore opened on its own (rosbags' own
 multi-file reader fails as a whole); bags of the older layout, many small parts and staging
 folders, read the same way.
-Types come from the definitions embedded in the bag, so reading needs no ROS install.
+Types come from the definitions embedded in the bag, so reading needs no ROS install;
+load_run converts records of an older schema to today's types (bag/schema.py), as replay does.
 
   read_raw(path)        -> RawRecord(topic, msgtype, timestamp_ns, data) in order
   read_messages(path)   -> (topic, timestamp_ns, rosbags message) in order
@@ -246,9 +247,13 @@ class _Deserializer:
         self.store: Typestore = get_typestore(Stores.ROS2_JAZZY)
 
     def __call__(self, record: RawRecord) -> object:
+        return self.store_for(record).deserialize_cdr(record.data, record.msgtype)
+
+    def store_for(self, record: RawRecord) -> Typestore:
+        """The typestore that holds the record's type as the bag defines it."""
         if record.msgtype not in self.store.types:
             self._register(record)
-        return self.store.deserialize_cdr(record.data, record.msgtype)
+        return self.store
 
     def _register(self, record: RawRecord) -> None:
         types: dict = {}
@@ -310,6 +315,17 @@ def load_run(path: str | Path, topics: Iterable[str] | None = None,
     already, superseded = len(validator.quarantined), len(validator.superseded)
     deserialize = _Deserializer()
     wanted = set(TOPICS) if topics is None else set(topics)
+    from sgim_nodes.bag.schema import SchemaError, Upgrader  # it builds on _Deserializer
+
+    upgrader = Upgrader()
+
+    def as_today(record: RawRecord) -> object:
+        """The record as today's message (fields added since at their defaults), or as
+        recorded when a field was removed or retyped since (records.to_record tolerates it)."""
+        try:
+            return upgrader.decode(record)
+        except SchemaError:
+            return deserialize(record)
 
     def declared(topic: str) -> None:
         run.topics.add(topic.rsplit("/", 1)[-1])
@@ -319,7 +335,7 @@ def load_run(path: str | Path, topics: Iterable[str] | None = None,
         if record.msgtype != TOPICS.get(name):
             continue
         try:
-            message = deserialize(record)
+            message = as_today(record)
         except NotABagError:
             raise
         except Exception as error:

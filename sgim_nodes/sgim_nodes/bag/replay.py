@@ -1,15 +1,18 @@
 """Play a run's bag back onto its topics, as `ros2 bag play` would (no rosbag2 on PyPI).
 
 The recorded CDR bytes are published as they are, with publishers of the recorded types and
-the graph's QoS, keeping the recorded time gaps divided by --rate. Records are VOLATILE: a
-message published before a subscriber matched is gone for it, so replay first waits until
-every topic has --subscribers matched subscriptions (default 1), for at most
---wait-subscribers seconds, and refuses to play (exit 3, naming the topics) when they are not
-there, unless --play-anyway. State topics (region_map) keep only their latest value in the
-publisher, so each of them is acknowledged before the next is sent, or fast replays would
-skip maps. Damaged bag parts are skipped with a warning (see bag.reader), and records that
-fail validation (bag/validation.py, as every reader) are left out and reported, unless
---include-quarantined plays the bag exactly as recorded (an audit of an attack).
+the graph's QoS, keeping the recorded time gaps divided by --rate. A record from a bag of an
+older version, whose type has gained fields since, is first re-encoded as today's type (the
+new fields at their defaults, bag/schema.py), so that today's subscribers decode it; a field
+removed or retyped since, or a type gone, is refused (exit 2) naming the topic and field.
+Records are VOLATILE: a message published before a subscriber matched is gone for it, so
+replay first waits until every topic has --subscribers matched subscriptions (default 1),
+for at most --wait-subscribers seconds, and refuses to play (exit 3, naming the topics) when
+they are not there, unless --play-anyway. State topics (region_map) keep only their latest
+value in the publisher, so each of them is acknowledged before the next is sent, or fast
+replays would skip maps. Damaged bag parts are skipped with a warning (see bag.reader), and
+records that fail validation (bag/validation.py, as every reader) are left out and reported,
+unless --include-quarantined plays them as recorded (an audit of an attack).
 
 Usage: python -m sgim_nodes.bag.replay BAG [--rate 2.0] [--topics movements goals] [--ros-args ...]
 """
@@ -22,13 +25,8 @@ import time
 import warnings
 from pathlib import Path
 
-from sgim_nodes.bag.reader import (
-    NotABagError,
-    RawRecord,
-    _Deserializer,
-    limits_for,
-    read_raw,
-)
+from sgim_nodes.bag.reader import NotABagError, RawRecord, limits_for, read_raw
+from sgim_nodes.bag.schema import SchemaError, Upgrader
 from sgim_nodes.bag.types import STATE_TOPICS, TOPICS
 from sgim_nodes.bag.validation import Problem, RunValidator, summarise
 
@@ -39,7 +37,9 @@ NO_SUBSCRIBERS = 3  # exit code: the expected subscribers never matched
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="replay",
-        description="Play a bag back onto its topics, keeping the recorded time gaps / RATE.",
+        description="Play a bag back onto its topics, keeping the recorded time gaps / RATE. "
+                    "A bag of an older version plays as today's messages (fields added "
+                    "since at their defaults).",
         epilog="ROS arguments may follow --ros-args, e.g. --ros-args -r __ns:=/replayed",
     )
     parser.add_argument("bag", type=Path, help="bag directory (or one .mcap / .db3 file)")
@@ -63,28 +63,33 @@ def _parser() -> argparse.ArgumentParser:
 
 def load(bag: Path, topics: list[str] | None, include_quarantined: bool = False
          ) -> list[RawRecord]:
-    """The records to play, with every reading problem printed as a warning; records that
-    fail validation are left out (and reported) unless `include_quarantined`."""
+    """The records to play, as today's messages, with every reading problem printed as a
+    warning. A record of an older schema is converted (bag/schema.py; SchemaError when it
+    cannot be); records that fail validation are left out (and reported) unless
+    `include_quarantined`, which keeps them as recorded."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         validator = RunValidator(limits_for(bag))
         records = list(read_raw(bag, topics, on_gap=validator.resync))
     for w in caught:
         print(f"replay: warning: {w.message}", file=sys.stderr)
-    if include_quarantined:
-        return records
-    deserialize = _Deserializer()
+    upgrader = Upgrader()
     kept = []
     for record in records:
         name = record.topic.rsplit("/", 1)[-1]
-        if record.msgtype == TOPICS.get(name):
-            try:
-                message = deserialize(record)
-            except Exception as error:
+        validated = record.msgtype == TOPICS.get(name) and not include_quarantined
+        upgrader.is_current(record)  # SchemaError: nothing is played
+        try:
+            record = upgrader.upgrade(record)
+            message = upgrader.decode(record) if validated else None
+        except Exception as error:
+            if include_quarantined:  # exactly as recorded
+                kept.append(record)
+            else:
                 validator.quarantine(name, -1, Problem("undecodable", str(error)))
-                continue
-            if not validator.admit(name, message).ok:
-                continue
+            continue
+        if validated and not validator.admit(name, message).ok:
+            continue
         kept.append(record)
     if validator.quarantined:
         print(f"replay: {len(validator.quarantined)} record(s) fail validation and are not "
@@ -180,7 +185,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--wait-subscribers and --subscribers must be >= 0")
     try:
         records = load(options.bag, options.topics, options.include_quarantined)
-    except NotABagError as error:
+    except (NotABagError, SchemaError) as error:
         print(f"replay: {error}", file=sys.stderr)
         return 2
     if not records:
