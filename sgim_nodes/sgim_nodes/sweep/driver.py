@@ -195,6 +195,14 @@ def _start_ray(args: argparse.Namespace) -> tuple[Any, str]:
     return ray, f"local ({args.parallel} side by side)"
 
 
+def stop_on_signals() -> None:
+    """Ctrl-C and SIGTERM stop the sweep cleanly (the runs under way cancelled, the status
+    written). Set after ray.init: Ray replaces SIGTERM's handler with one that ends the
+    process on the spot, and its driver let Ctrl-C pass without stopping the sweep."""
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, _interrupt)
+
+
 def _collect(ray: Any, ref: Any, spec: RunSpec, sweep: Sweep, progress: Progress,
              commit: str, warned: set[str]) -> None:
     """One finished task: its run installed in the results directory, its state recorded."""
@@ -253,6 +261,7 @@ def run_sweep(sweep: Sweep, args: argparse.Namespace, todo: list[RunSpec],
     except Exception as error:  # Ray start-up errors are of many kinds
         say(f"could not start or join Ray: {error}")
         return 1
+    stop_on_signals()
     progress = Progress(sweep, states, where)
     # On the head: the one node whose loss ends the cluster anyway.
     board = ray.remote(Board).options(num_cpus=0, resources={HEAD_RESOURCE: 0.001}).remote()
@@ -351,11 +360,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"finished, {len(todo)} to do -> {sweep.runs_dir}")
         if not todo:
             return 0
-        previous = signal.signal(signal.SIGTERM, _interrupt)
+        previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+        signal.signal(signal.SIGTERM, _interrupt)
         try:
             return run_sweep(sweep, args, todo, states)
         finally:
-            signal.signal(signal.SIGTERM, previous)
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)
             results.clean_incoming(sweep.runs_dir)
 
 
