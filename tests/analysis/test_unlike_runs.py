@@ -41,22 +41,24 @@ def test_runs_of_a_learner_with_different_teachers_or_budgets_are_not_pooled(
         _set_metadata(study / f"sgim-d-seed{seed}", teacher=teacher)
     with pytest.warns(AnalysisWarning, match="sgim-d: runs differ in teacher"):
         loaded = load_study(study)
-    assert loaded.learners == ["sgim-d [teacher=automatic]", "sgim-d [teacher=human]"]
-    assert [r.seed for r in loaded.runs_of("sgim-d [teacher=automatic]")] == [0, 1]
+    # The usual runs keep the learner's name; the others are named by what sets them apart.
+    assert loaded.learners == ["sgim-d", "sgim-d [teacher=human]"]
+    assert [r.seed for r in loaded.runs_of("sgim-d")] == [0, 1]
     out = tmp_path / "out"
     assert main([str(study), "--out", str(out)]) == 0
     results = json.loads((out / "results.json").read_text())
-    assert results["final_errors"]["sgim-d [teacher=automatic]"]["n"] == 2
+    assert results["final_errors"]["sgim-d"]["n"] == 2
     assert results["final_errors"]["sgim-d [teacher=human]"]["n"] == 1
 
 
 def test_runs_of_a_learner_with_different_budgets_are_not_pooled(make_study) -> None:
     study = make_study(seeds=3, learners=("random",))
     _set_metadata(study / "random-seed2", movements=40)  # same recordings, another budget
-    with pytest.warns(AnalysisWarning, match="random: runs differ in movements"):
+    with pytest.warns(AnalysisWarning, match=r"random: runs differ in movements.*'random' "
+                      r"\(movements=20; seeds 0, 1\)"):
         loaded = load_study(study)
-    assert loaded.learners == ["random [movements=20]", "random [movements=40]"]
-    assert [r.seed for r in loaded.runs_of("random [movements=20]")] == [0, 1]
+    assert loaded.learners == ["random", "random [movements=40]"]
+    assert [r.seed for r in loaded.runs_of("random")] == [0, 1]
     assert [r.seed for r in loaded.runs_of("random [movements=40]")] == [2]
 
 
@@ -119,3 +121,20 @@ def test_quarantined_records_are_reported_and_left_out(tmp_path: Path) -> None:
         run = load_study(study).runs[0]
     assert run.movement_index.tolist() == list(range(1, N_MOVES + 1))
     assert run.eval_mean.tolist() == pytest.approx([0.9, 0.3])
+
+
+def test_a_sweep_s_groups_are_named_by_what_they_change_from_the_usual_runs(make_study) -> None:
+    """A sweep varies one setting per block around the paper's default, which every block
+    shares: each group is named by its own change only, so labels (and legends) stay short."""
+    study = make_study(seeds=3, learners=("sgim-d",))
+    settings = [(150, "random-unreached"), (50, "random-unreached"), (150, "nearest-unreached")]
+    for seed, (period, choice) in enumerate(settings):
+        _set_metadata(study / f"sgim-d-seed{seed}",
+                      parameters={"seed": seed, "demonstration_period": period,
+                                  "teacher_choice": choice, "output": f"/x/{seed}"})
+    with pytest.warns(AnalysisWarning, match="demonstration_period, teacher_choice"):
+        loaded = load_study(study)
+    assert sorted(loaded.learners) == ["sgim-d", "sgim-d [demonstration_period=50]",
+                                       "sgim-d [teacher_choice=nearest-unreached]"]
+    assert [r.seed for r in loaded.runs_of("sgim-d")] == [0]
+    assert [r.seed for r in loaded.runs_of("sgim-d [demonstration_period=50]")] == [1]

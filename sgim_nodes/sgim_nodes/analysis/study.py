@@ -345,6 +345,21 @@ def _shown(value) -> str:
     return str(value) if not isinstance(value, float) else f"{value:g}"
 
 
+def _usual_values(conditions: list[dict], keys: list[str]) -> dict[str, object]:
+    """Per key, the value more common among the runs than every other; a key whose most
+    common values tie has none (every run is then named by its value)."""
+    usual: dict[str, object] = {}
+    for k in keys:
+        counts: dict[str, tuple[int, object]] = {}
+        for c in conditions:
+            n, _ = counts.get(repr(c.get(k)), (0, c.get(k)))
+            counts[repr(c.get(k))] = (n + 1, c.get(k))
+        ranked = sorted(counts.values(), key=lambda nv: -nv[0])
+        if len(ranked) == 1 or ranked[0][0] > ranked[1][0]:
+            usual[k] = ranked[0][1]
+    return usual
+
+
 def group_runs(runs: list[RunData], warn: Warn = _default_warn) -> dict[str, list[str]]:
     """Label each run with the group it may be pooled in; return the groups in which a seed
     repeats (group -> run names). Runs of a learner that differ in anything but per-run
@@ -356,15 +371,22 @@ def group_runs(runs: list[RunData], warn: Warn = _default_warn) -> dict[str, lis
         conditions = [run.condition for run in members]
         keys = sorted({k for c in conditions for k in c})
         differing = [k for k in keys if len({repr(c.get(k)) for c in conditions}) > 1]
+        usual = _usual_values(conditions, differing)
         for run, c in zip(members, conditions, strict=True):
-            run.group = learner if not differing else (
-                f"{learner} [" + ", ".join(f"{k}={_shown(c.get(k))}" for k in differing) + "]")
+            # Named by what sets it apart from the learner's usual runs (in a sweep, the
+            # paper's default setting that every block shares): "sgim-d [timing=on-request]".
+            shown = [k for k in differing
+                     if k not in usual or repr(c.get(k)) != repr(usual[k])]
+            run.group = learner if not shown else (
+                f"{learner} [" + ", ".join(f"{k}={_shown(c.get(k))}" for k in shown) + "]")
         if differing:
             groups: dict[str, list[str]] = {}
             for run in members:
                 groups.setdefault(run.group, []).append(str(run.seed))
+            plain = ", ".join(f"{k}={_shown(v)}" for k, v in usual.items())
             warn(f"{learner}: runs differ in {', '.join(differing)}; not pooled, analysed as "
-                 + "; ".join(f"'{g}' (seeds {', '.join(s)})" for g, s in groups.items()))
+                 + "; ".join(f"'{g}' ({plain + '; ' if g == learner else ''}seeds "
+                             f"{', '.join(s)})" for g, s in groups.items()))
     repeated: dict[str, list[str]] = {}
     seen: dict[tuple[str, int], str] = {}
     for run in sorted(runs, key=lambda r: r.name):
