@@ -40,8 +40,15 @@ BINS = 40
 DPI = 110
 
 
+# For groups that are not a plain learner (a sweep's settings): the tab10 colours no learner
+# owns, then tab20's light shades, so that eleven or more curves stay apart.
+OTHER_COLOURS = ("tab:orange", "tab:brown", "tab:pink", "tab:olive", "tab:cyan",
+                 *(matplotlib.colors.to_hex(matplotlib.colormaps["tab20"](2 * i + 1))
+                   for i in range(10)))
+
+
 def colour(learner: str, k: int) -> str:
-    return COLOURS.get(learner, f"C{k % 10}")
+    return COLOURS.get(learner, OTHER_COLOURS[k % len(OTHER_COLOURS)])
 
 
 def _outline_isolated(ax: plt.Axes, edge: str = "black") -> None:
@@ -56,12 +63,17 @@ def _outcome_axes(ax: plt.Axes) -> None:
     ax.tick_params(labelsize=7)
 
 
+MANY_CURVES = 5
+"""More curves than this (a sweep's settings): a wider figure with the legend beside it."""
+
+
 def plot_error_curves(curves: dict[str, Curve], path: Path, floor: float | None = None,
                       demonstrations: dict[str, DemonstrationTimes] | None = None) -> Path:
     """``floor``: the benchmark's floor (``analysis.floor``), drawn as a dashed line.
     ``demonstrations``: when each learner's runs were shown one, ticks along the bottom in its
     colour, darker where more of its runs got one at that movement."""
-    fig, ax = plt.subplots(figsize=(8, 5))
+    many = len(curves) > MANY_CURVES  # a sweep: the legend goes beside the axes
+    fig, ax = plt.subplots(figsize=(12, 5.5) if many else (8, 5))
     _demonstration_ticks(ax, curves, demonstrations or {})
     if floor is not None:
         ax.axhline(floor, color="black", linestyle="--", linewidth=1,
@@ -80,7 +92,11 @@ def plot_error_curves(curves: dict[str, Curve], path: Path, floor: float | None 
     ax.set_title("Error on the benchmark goals: mean and 95 % interval over seeds")
     ax.set_ylim(bottom=0)
     ax.grid(alpha=0.3)
-    ax.legend()
+    if many:
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small",
+                  borderaxespad=0.0)
+    else:
+        ax.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=DPI)
     plt.close(fig)
@@ -91,15 +107,17 @@ def _demonstration_ticks(ax: plt.Axes, curves: dict[str, Curve],
                          demonstrations: dict[str, DemonstrationTimes]) -> None:
     rows = [learner for learner in curves if learner in demonstrations]
     bottom = ax.get_xaxis_transform()  # x in movements, y in axes fractions
+    height = min(0.035, 0.3 / max(len(rows), 1))  # a sweep's many rows stay in the bottom 30 %
     for row, learner in enumerate(rows):
         times = demonstrations[learner]
         col = colour(learner, list(curves).index(learner))
-        y = 0.01 + 0.035 * row
+        y = 0.01 + height * row
         rgb = matplotlib.colors.to_rgb(col)
-        ax.vlines(times.movements, y, y + 0.03, transform=bottom, linewidth=0.8,
+        ax.vlines(times.movements, y, y + 0.85 * height, transform=bottom, linewidth=0.8,
                   colors=[(*rgb, 0.25 + 0.75 * k / times.runs) for k in times.runs_with_one])
-        ax.plot([], [], "|", color=col, markersize=8,
-                label=f"{learner}: a demonstration (darker: in more runs)")
+    if rows:  # one legend entry for every row of ticks
+        ax.plot([], [], "|", color="grey", markersize=8,
+                label="a demonstration, in its learner's colour (darker: in more runs)")
 
 
 def frame_bounds(frames: Sequence[int], cumulative: bool) -> list[tuple[int, int]]:
