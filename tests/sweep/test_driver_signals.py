@@ -8,13 +8,13 @@ from __future__ import annotations
 import signal
 import subprocess
 import time
-from pathlib import Path
 
 import pytest
 import yaml
 
 from sgim_nodes.sweep import results
 from tests.conftest import REPO
+from tests.sweep.processes import processes_left
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
@@ -22,17 +22,6 @@ RUN_SWEEP = str(REPO / "ros_ws" / "run_sweep.sh")
 # One run long enough to be interrupted while it moves.
 SWEEP = {"movements": 3000, "eval_every": 1000, "seeds": 1, "learner": "random",
          "run_timeout": 900}
-
-
-def _processes_naming(path: Path) -> list[int]:
-    found = []
-    for cmdline in Path("/proc").glob("[0-9]*/cmdline"):
-        try:
-            if str(path).encode() in cmdline.read_bytes():
-                found.append(int(cmdline.parent.name))
-        except OSError:
-            continue
-    return found
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["ctrl-c", "sigterm"])
@@ -64,10 +53,7 @@ def test_a_signal_stops_the_sweep_cleanly(tmp_path, sig):
     text = log.read_text(errors="replace")
     assert code == 130, text[-3000:]
     assert "interrupted: stopping the runs under way" in text
-    deadline = time.monotonic() + 60
-    while _processes_naming(tmp_path) and time.monotonic() < deadline:
-        time.sleep(1)
-    assert not _processes_naming(tmp_path), "a graph of the sweep outlived it"
+    assert not processes_left(tmp_path, 60), "a graph of the sweep outlived it"
     status = results.read_yaml(runs / results.STATUS_FILE)
     assert status["counts"]["finished"] == 0
     assert not [p for p in runs.iterdir() if p.name != results.STATUS_FILE

@@ -21,6 +21,7 @@ from sgim_nodes.sweep import results, task
 from sgim_nodes.sweep.results import State
 from sgim_nodes.sweep.sweep_file import RunSpec, load
 from tests.conftest import REPO
+from tests.sweep.processes import processes_left
 from tests.sweep.ray_cluster import LocalCluster
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -113,24 +114,10 @@ def domains_never_shared(runs: Path, names: list[str]) -> int:
     return overlapping
 
 
-def processes_naming(path: Path) -> list[int]:
-    found = []
-    for cmdline in Path("/proc").glob("[0-9]*/cmdline"):
-        try:
-            if str(path).encode() in cmdline.read_bytes():
-                found.append(int(cmdline.parent.name))
-        except OSError:
-            continue
-    return found
-
-
 def nothing_left(tmp_path: Path, lost: bool = False, timeout: float = 120) -> None:
     """No graph outlives the sweep, and its scratch folders are gone; a task lost with its
     machine leaves its folder to the next task there (clean_stale), which finds it free."""
-    deadline = time.monotonic() + timeout
-    while processes_naming(tmp_path) and time.monotonic() < deadline:
-        time.sleep(1)
-    assert not processes_naming(tmp_path), "a graph of the sweep outlived it"
+    assert not processes_left(tmp_path, timeout), "a graph of the sweep outlived it"
     scratch = tmp_path / "scratch"
     if lost:
         task.clean_stale(scratch)

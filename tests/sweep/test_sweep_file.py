@@ -125,8 +125,8 @@ def test_default_values_make_the_default_run_once():
 
 
 def test_a_teacher_parameter_at_its_default_names_no_run_apart():
-    """The teacher's own defaults count as defaults, not only learner.yaml's: the paper's
-    choice rule, written out, is the paper's run."""
+    """The teacher's choice rule at its default (learner.yaml holds it beside the learner's
+    parameters), written out, is the paper's run: it names no run apart."""
     runs = expand({"seeds": [0], "learner": "sgim-d",
                    "param": {"teacher_choice": ["random-unreached", "nearest-unreached"]}})
     assert [r.name for r in runs] == ["sgim-d-seed0",
