@@ -13,7 +13,8 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.task import Future
 
-from sgim_nodes.nodes.social_interaction import RunAborted, SocialInteraction
+from sgim_nodes.nodes.arbiter_jobs import JobSlot
+from sgim_nodes.nodes.graph_startup import RunAborted
 
 pytestmark = pytest.mark.ros
 
@@ -38,36 +39,34 @@ class _Client:
         return _done(self.handle)
 
 
-def _run_job(context, status: int) -> tuple[object, int]:
-    """Drive SocialInteraction._action on a bare node standing in for the arbiter."""
+def _run_job(context, status: int) -> tuple[object, JobSlot]:
+    """Drive the arbiter's JobSlot on a bare node standing in for the arbiter."""
     node = Node("arbiter_stand_in", context=context)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
-    node.p, node.pending, node.pace, node.count = {"call_timeout": 5.0}, [], None, 10
-    node._job = node._job_name = None
-    task = executor.create_task(SocialInteraction._action(node, _Client(status), object(),
-                                                          "reach_goal"))
+    slot = JobSlot(node)
+    task = executor.create_task(slot.run(_Client(status), object(), "reach_goal", 10, 5.0))
     try:
         try:  # rclpy's executor re-raises a task's exception from spin_once
             while not task.done():
                 executor.spin_once(timeout_sec=0.1)
-            return task.result(), node.count
+            return task.result(), slot
         except RunAborted as error:
-            return error, node.count
+            return error, slot
     finally:
         executor.shutdown()
         node.destroy_node()
 
 
-def test_a_job_that_succeeded_counts_its_movements(rclpy_context):
-    result, count = _run_job(rclpy_context, GoalStatus.STATUS_SUCCEEDED)
+def test_a_job_that_succeeded_gives_its_movements(rclpy_context):
+    result, slot = _run_job(rclpy_context, GoalStatus.STATUS_SUCCEEDED)
     assert not isinstance(result, RunAborted) and result.movements_used == 3
-    assert count == 13
+    assert slot.handle is None  # nothing left to cut
 
 
 @pytest.mark.parametrize("status", [GoalStatus.STATUS_UNKNOWN, GoalStatus.STATUS_EXECUTING])
-def test_a_job_without_a_known_end_stops_the_run_and_counts_nothing(rclpy_context, status):
-    error, count = _run_job(rclpy_context, status)
+def test_a_job_without_a_known_end_stops_the_run_and_gives_no_result(rclpy_context, status):
+    error, slot = _run_job(rclpy_context, status)
     assert isinstance(error, RunAborted)
     assert "'reach_goal' job at movement 10" in str(error) and f"status {status}" in str(error)
-    assert count == 10
+    assert slot.handle is None

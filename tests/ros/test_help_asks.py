@@ -111,15 +111,27 @@ def test_answers_are_kept_once_and_only_for_asks_made_at_their_count():
     assert "answered already" in asks.answered(demo) and asks.answers == {}
 
 
-def test_a_resumed_run_counts_its_asks_and_refills_the_window_since_the_last():
+def _resumed(ask_goal):
+    """A run resumed at 50 whose one ask came at 30, where own attempt 10 ended."""
     asks, _ = _asks()
-    ask = SimpleNamespace(movement_index=30)
+    ask = SimpleNamespace(movement_index=30, goal=ask_goal)
     own = [SimpleNamespace(goal_index=k, movement_index=10 + 2 * k, competence=-0.1 * k,
                            goal=[0.0, 0.01 * k]) for k in range(1, 20)]
     imitation = SimpleNamespace(goal_index=0, movement_index=33, competence=-0.9, goal=[1, 1])
-    records = SimpleNamespace(help_requests=[ask, SimpleNamespace(movement_index=60)],
+    records = SimpleNamespace(help_requests=[ask, SimpleNamespace(movement_index=60, goal=[])],
                               competences=[*own, imitation])
     asks.resume(records, 50)  # the ask at 60 is after the resumed count
+    return asks
+
+
+def test_a_resumed_run_counts_its_asks_and_refills_the_window_since_the_last():
+    asks = _resumed(ask_goal=[0.0, 0.10])  # attempt 10 ended by itself, then the ask
     assert asks.rule.asks == 1
     assert asks.rule._recent == pytest.approx([-0.1 * k for k in range(11, 20)])
     assert asks.last_goal == pytest.approx([0.0, 0.19])
+
+
+def test_a_resumed_run_puts_the_attempt_an_ask_cut_after_the_ask_as_the_live_run_did():
+    asks = _resumed(ask_goal=[0.0, 0.09])  # the ask named attempt 9: it cut attempt 10
+    assert asks.rule.asks == 1
+    assert asks.rule._recent == pytest.approx([-0.1 * k for k in range(10, 20)])

@@ -41,14 +41,21 @@ class HelpAsks:
 
     def resume(self, records, count: int) -> None:
         """Asks already made and the window since the last one, from a run's records (the
-        competences of own goal attempts: those with a goal index). Approximate where an ask
-        cut an attempt: the records do not say which window its competence went to."""
+        competences of own goal attempts: those with a goal index).
+
+        An attempt that ends where the last ask was made went into the window before the ask
+        if it ended by itself, after it if the ask cut it (`attempt_ended`); the ask's goal
+        tells which, since it is the goal of the latest attempt folded before the ask. One
+        case stays open: a run stopped right where an ask was due, before it was made, whose
+        last attempt the ask would have cut is folded as if it had ended by itself."""
         asks = [h for h in records.help_requests if h.movement_index < count]
         self.rule.asks = len(asks)
-        since = max((h.movement_index for h in asks), default=-1)
+        last = asks[-1] if asks else None
         own = [c for c in records.competences if c.goal_index > 0 and c.movement_index <= count]
         for c in own:
-            if c.movement_index > since:
+            if last is None or c.movement_index > last.movement_index or (
+                    c.movement_index == last.movement_index
+                    and not np.allclose(c.goal, last.goal)):  # the attempt the ask cut
                 self.rule.attempt_ended(c.competence)
         if own:
             self.last_goal = np.asarray(own[-1].goal, dtype=float)

@@ -45,24 +45,28 @@ demonstration_period, timing, wait_for_teacher, wait_for_evaluation, wait_for_re
 from __future__ import annotations
 
 import time
-from collections import deque
 
-from action_msgs.msg import GoalStatus
 from rclpy.action import ActionClient
 from rclpy.duration import Duration
-from rclpy.task import Future
 
 from sgim_msgs.action import Imitate, ReachGoal
 from sgim_msgs.msg import Competence, Demonstration, Evaluation, Movement, RunStatus
-from sgim_msgs.srv import ChooseGoal, ExecuteAction, RecorderReady, RegisterDemonstration
+from sgim_msgs.srv import ChooseGoal, ExecuteAction, RegisterDemonstration
 from sgim_nodes.bag.resume import resume_point
-from sgim_nodes.bag.types import RECORDED_TOPICS as RECORD_TOPICS
 from sgim_nodes.bag.validation import Limits, LiveGate, teaching_set_size
 from sgim_nodes.core.competence import competence
 from sgim_nodes.core.help_request import DEFAULT_TIMING, ON_REQUEST, TIMINGS
 from sgim_nodes.core.learners import GOAL_BABBLERS
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.core.teaching import GOAL_ONLY, MEANS_ONLY
+from sgim_nodes.nodes.arbiter_jobs import JobSlot, Waits
+from sgim_nodes.nodes.demonstration_inbox import DemonstrationInbox, shown
+from sgim_nodes.nodes.graph_startup import (
+    ExpectedGraph,
+    RunAborted,
+    call_bounded,
+    wait_for_graph,
+)
 from sgim_nodes.nodes.help_asks import HelpAsks
 from sgim_nodes.nodes.pace import FOREVER, PaceControl
 from sgim_nodes.nodes.ros_glue import (
@@ -76,7 +80,6 @@ from sgim_nodes.nodes.ros_glue import (
 )
 from sgim_nodes.nodes.sim_client import SIM_CLIENT_PARAMS, SimClient, SimulatorError
 from sgim_ros import qos
-from sgim_ros.entry import first_of
 from sgim_ros.params import Param, ParameterError, at_least, non_negative, one_of, positive
 
 SOCIAL = ("sgim-d", "demo-only")
@@ -112,15 +115,6 @@ PARAMS = learner_node_params(
 )
 
 
-def shown(demo: Demonstration) -> bool:
-    """False for the automatic teacher's "nothing left to show" (empty action and outcome)."""
-    return bool(len(demo.action) or len(demo.outcome))
-
-
-class RunAborted(RuntimeError):
-    """The run cannot go on (a node is missing or silent); the message says which."""
-
-
 class SocialInteraction(AsyncNode):
     def __init__(self) -> None:
         super().__init__("social_interaction")
@@ -145,14 +139,11 @@ class SocialInteraction(AsyncNode):
         self.count = 0
         self.goals_folded = 0  # competences published so far (by the explorer and by us)
         self.latest_demo: Demonstration | None = None
-        self.pending: deque[Demonstration] = deque()
-        self.boundary_word: dict[int, Demonstration] = {}
         self.evaluated: set[int] = set()
         self.turns_taken: set[int] = set()  # teacher boundaries already handled
         self.finished, self.exit_code = False, 0
-        self._job = None  # the running action's goal handle, to cancel on a demonstration
-        self._job_name = ""
-        self._waiters: list[tuple[callable, Future]] = []
+        self.job = JobSlot(self)  # the running action, to cut on a demonstration
+        self.waits = Waits(self)
         self._started = time.monotonic()
         self._last_log = 0
 
@@ -173,7 +164,9 @@ class SocialInteraction(AsyncNode):
         self.gate = LiveGate(self.get_logger().error, Limits(
             values["action_size"], values["outcome_size"], budget=self.total,
             teaching_set_size=teaching_set_size(values["teaching_set"] or None)))
-        self.refused = 0  # demonstrations refused (invalid or late)
+        self.inbox = DemonstrationInbox(self.gate, self.total, self.automatic, self.asks,
+                                        self._say_refusal)
+        self.pending = self.inbox.pending  # human teachers' demonstrations, in order
         self._competences = self.create_publisher(Competence, "competences", qos.RECORDS)
         self.create_subscription(Demonstration, "demonstrations", self._on_demo, qos.RECORDS)
         self.create_subscription(Evaluation, "evaluations", self._on_evaluation, qos.RECORDS)
@@ -202,36 +195,9 @@ class SocialInteraction(AsyncNode):
     def _on_demo(self, msg: Demonstration) -> None:
         if not self.social:
             return
-        problem = self.gate.check("demonstrations", msg)
-        if problem is not None:
-            self._refuse(msg, problem.detail)
-            return
-        if self.automatic and msg.source == "automatic":
-            why = self._automatic_word(msg)
-            if why:
-                self._refuse(msg, why, always=True)
-        elif self.count >= self.total and shown(msg):
-            self._refuse(msg, f"it came after the movement budget of {self.total} was spent",
-                         always=True)
-        elif shown(msg):
-            self.pending.append(msg)
-            if self._job is not None:  # preempt: honoured at the job's next movement boundary
-                self._job.cancel_goal_async()
+        if self.inbox.receive(msg, self.count):
+            self.job.cancel()  # preempt: honoured at the job's next movement boundary
         self._wake()
-
-    def _automatic_word(self, msg: Demonstration) -> str:
-        """File the automatic teacher's word: at its boundary (period) or as the answer to an
-        ask (on-request); '' or why it is refused (a teacher of the other timing)."""
-        if self.asks is None:
-            if msg.help_request:
-                return ("it answers a help request, but this learner's timing is 'period': "
-                        "the teacher's timing must be the same")
-            self.boundary_word[msg.movement_index] = msg
-            return ""
-        if not msg.help_request:
-            return ("it answers no help request, but this learner's timing is 'on-request': "
-                    "the teacher's timing must be the same")
-        return self.asks.answered(msg)
 
     def _on_evaluation(self, msg: Evaluation) -> None:
         if self.gate.check("evaluations", msg):
@@ -241,44 +207,34 @@ class SocialInteraction(AsyncNode):
 
     def _preempt_goal(self) -> None:
         """Cut a goal attempt at its next movement boundary (an imitation is never cut)."""
-        if self._job is not None and self._job_name == "reach_goal":
-            self._job.cancel_goal_async()
+        self.job.cancel(only="reach_goal")
 
     def _wake(self) -> None:
         if self.pace is not None:
             self.pace.notify()
-        for condition, future in self._waiters:
-            if not future.done() and condition():
-                future.set_result(True)
-        self._waiters = [(c, f) for c, f in self._waiters if not f.done()]
+        self.waits.check()
 
     async def _until(self, condition, timeout: float, what: str) -> None:
-        if condition():
-            return
-        future = Future(executor=self.executor)
-        self._waiters.append((condition, future))
-        if not await first_of(self, future, timeout):
-            raise RunAborted(f"timed out after {timeout:g} s waiting for {what}")
+        await self.waits.until(condition, timeout, what)
 
     # --- the run ----------------------------------------------------------------------------
     async def _start(self) -> None:
         self._start_timer.cancel()
         try:
-            await self._wait_for_graph()
+            await wait_for_graph(self, self._expected_graph(), self.p["startup_timeout"],
+                                 self.p["settle_time"])
             self._publish_status(RunStatus.STATE_RUNNING,
                                  f"resumed at {self.count}" if self.count else "started")
             await self._run()
-            while self.pending:  # demonstrations that waited in vain
-                self._refuse(self.pending.popleft(), "the movement budget was spent while it "
-                             "waited for its turn")
+            self.inbox.refuse_waiting()
             self._publish_status(RunStatus.STATE_RUNNING, "movement budget spent")
             if self.p["wait_for_evaluation"]:
                 await self._until(lambda: self.total in self.evaluated,
                                   self.p["evaluation_timeout"],
                                   f"the evaluation at movement {self.total} (evaluator)")
-            if self.refused:
-                self._publish_status(RunStatus.STATE_RUNNING, f"{self.refused} demonstrations "
-                                     "refused in all (see the arbiter's log)")
+            if self.inbox.refused:
+                self._publish_status(RunStatus.STATE_RUNNING, f"{self.inbox.refused} "
+                                     "demonstrations refused in all (see the arbiter's log)")
             self._publish_status(RunStatus.STATE_FINISHED, "finished")
             self.get_logger().info(f"run finished: {self.count} movements in "
                                    f"{time.monotonic() - self._started:.1f} s")
@@ -290,90 +246,35 @@ class SocialInteraction(AsyncNode):
         self._status.wait_for_all_acked(Duration(seconds=5.0))
         self.finished = True
 
-    async def _wait_for_graph(self) -> None:
-        timeout = self.p["startup_timeout"]
-        servers = [(self.sim.client, "execute_action")]
+    def _expected_graph(self) -> ExpectedGraph:
+        """The servers, publishers and listeners this run needs (graph_startup.py)."""
+        expected = ExpectedGraph(servers=[(self.sim.client, "execute_action")])
         if self.learner in GOAL_BABBLERS:
-            servers += [(self.goal_client, "choose_goal"), (self.reach, "reach_goal")]
+            expected.servers += [(self.goal_client, "choose_goal"), (self.reach, "reach_goal")]
             if self.social:
-                servers.append((self.register_client, "register_demonstration"))
+                expected.servers.append((self.register_client, "register_demonstration"))
         if self.social:
-            servers.append((self.imitate, "imitate"))
-        deadline = time.monotonic() + timeout
-        for client, name in servers:
-            ready = client.server_is_ready if hasattr(client, "server_is_ready") else (
-                client.service_is_ready)
-            while not ready():
-                if time.monotonic() > deadline:
-                    raise RunAborted(f"no '{name}' server after {timeout:g} s: is its node up?")
-                await first_of(self, Future(), 0.1)
+            expected.servers.append((self.imitate, "imitate"))
         # The evaluator and the automatic teacher must hear the start too.
-        publishers = ["evaluations"] if self.p["wait_for_evaluation"] else []
-        if self.automatic:
-            publishers.append("demonstrations")
-        for topic in publishers:
-            while self.count_publishers(topic) < 1:
-                if time.monotonic() > deadline:
-                    raise RunAborted(f"nobody publishes '{topic}' after {timeout:g} s: is its "
-                                     "node (evaluator or teacher) up?")
-                await first_of(self, Future(), 0.1)
-        # Every node that listens to the run's records must hear it from its first record:
-        # each must have matched every publisher that we see (a late DDS match loses records
-        # silently; sgim_ros/ready.py).
-        for service, who in self._listeners():
-            await self._wait_until_listening(service, who, deadline, timeout)
-        await first_of(self, Future(), self.p["settle_time"])
-
-    def _listeners(self) -> list[tuple[str, str]]:
-        """The ready services to ask before the start, with who serves each."""
-        listeners = []
-        if self.p["wait_for_recorder"]:
-            listeners.append(("recorder_ready", "the recorder node (or set wait_for_recorder "
-                                                "to false)"))
         if self.p["wait_for_evaluation"]:
-            listeners.append(("evaluator_ready", "the evaluator node"))
-        if self.learner in GOAL_BABBLERS:
-            listeners.append(("explorer_ready", "the low_level_explorer node"))
-        if self.social:
-            listeners.append(("imitation_ready", "the imitation node"))
+            expected.publishers.append("evaluations")
+            expected.listeners.append(("evaluator_ready", "the evaluator node"))
         if self.automatic:
-            listeners.append(("teacher_ready", "the teacher node"))
-        return listeners
+            expected.publishers.append("demonstrations")
+        if self.p["wait_for_recorder"]:
+            expected.listeners.insert(0, ("recorder_ready", "the recorder node (or set "
+                                                            "wait_for_recorder to false)"))
+        if self.learner in GOAL_BABBLERS:
+            expected.listeners.append(("explorer_ready", "the low_level_explorer node"))
+        if self.social:
+            expected.listeners.append(("imitation_ready", "the imitation node"))
+        if self.automatic:
+            expected.listeners.append(("teacher_ready", "the teacher node"))
+        return expected
 
-    async def _wait_until_listening(self, service: str, who: str, deadline: float,
-                                    timeout: float) -> None:
-        ready = self.create_client(RecorderReady, service)
-        name = service.removesuffix("_ready")
-        why = f"no {service} service: is {who} up?"
-        while time.monotonic() < deadline:
-            if ready.service_is_ready():
-                request = RecorderReady.Request(topics=list(RECORD_TOPICS))
-                request.publishers = [self.count_publishers(t) for t in RECORD_TOPICS]
-                # Each call is bounded: a request lost in discovery is asked again.
-                reply = await self._call(ready, request, service,
-                                         min(5.0, max(0.1, deadline - time.monotonic())),
-                                         fatal=False)
-                if reply is not None and reply.ready:
-                    self.destroy_client(ready)
-                    return
-                why = (f"the {name} did not answer {service}" if reply is None
-                       else f"the {name} is not ready: {reply.message}")
-            await first_of(self, Future(), 0.1)
-        raise RunAborted(f"after {timeout:g} s waiting for {service}, {why}")
-
-    async def _call(self, client, request, name: str, timeout: float | None = None,
-                    fatal: bool = True):
-        """A service call that gives up after `timeout` (call_timeout by default): None, or
-        RunAborted naming the service when `fatal`."""
-        timeout = self.p["call_timeout"] if timeout is None else timeout
-        call = client.call_async(request)
-        if await first_of(self, call, timeout):
-            return call.result()
-        client.remove_pending_request(call)
-        if fatal:
-            raise RunAborted(f"no answer from {name} after {timeout:g} s: is its node "
-                             "running?")
-        return None
+    async def _call(self, client, request, name: str):
+        """A service call that gives up after call_timeout (RunAborted naming the service)."""
+        return await call_bounded(self, client, request, name, self.p["call_timeout"])
 
     async def _run(self) -> None:
         while self.count < self.total:
@@ -387,10 +288,10 @@ class SocialInteraction(AsyncNode):
             boundary = self.sync_period and self.count % self.sync_period == 0
             if boundary and self.count not in self.turns_taken:
                 self.turns_taken.add(self.count)
-                await self._until(lambda b=self.count: b in self.boundary_word,
+                await self._until(lambda b=self.count: b in self.inbox.boundary_word,
                                   self.p["teacher_timeout"],
                                   f"the teacher's word at movement {self.count}")
-                word = self.boundary_word.pop(self.count)
+                word = self.inbox.boundary_word.pop(self.count)
                 if shown(word):
                     await self._take_demonstration(word)
                 continue
@@ -441,13 +342,13 @@ class SocialInteraction(AsyncNode):
 
     async def _take_demonstration(self, demo: Demonstration) -> None:
         if self.count >= self.total:
-            self._refuse(demo, f"the movement budget of {self.total} is spent")
+            self.inbox.refuse(demo, f"the movement budget of {self.total} is spent")
             return
         self.get_logger().info(f"demonstration {demo.index} at movement {self.count} "
                                f"({demo.content}, outcome {floats(demo.outcome)})")
         if self.learner == "demo-only":
             if demo.content == GOAL_ONLY:
-                self._refuse(demo, "demo-only varies demonstrated actions: a goal-only "
+                self.inbox.refuse(demo, "demo-only varies demonstrated actions: a goal-only "
                              "demonstration shows none", always=True)
                 return
             self.latest_demo = demo
@@ -466,7 +367,7 @@ class SocialInteraction(AsyncNode):
                                  RegisterDemonstration.Request(demonstration=demo),
                                  "register_demonstration")
         if not reply.accepted:
-            self._refuse(demo, f"the explorer refused it: {reply.message}")
+            self.inbox.refuse(demo, f"the explorer refused it: {reply.message}")
             return
         self._publish_taken(demo)
         # The imitation never runs past the budget (the single-process runner stops there).
@@ -512,33 +413,9 @@ class SocialInteraction(AsyncNode):
             movements_before=self.count), "imitate")
 
     async def _action(self, client: ActionClient, goal, name: str):
-        timeout = self.p["call_timeout"]
-        sent = client.send_goal_async(goal)
-        if not await first_of(self, sent, timeout):
-            raise RunAborted(f"'{name}' did not answer a job request in {timeout:g} s")
-        handle = sent.result()
-        if not handle.accepted:
-            raise RunAborted(f"'{name}' refused a job: is another arbiter running?")
-        self._job, self._job_name = handle, name
-        try:
-            held = self.pending or (self.pace is not None and self.pace.paused)
-            if held and name == "reach_goal":
-                handle.cancel_goal_async()  # a demonstration or a pause came while it was sent
-            result_future = handle.get_result_async()
-            if not await first_of(self, result_future, timeout):
-                raise RunAborted(f"no result from the '{name}' job after {timeout:g} s "
-                                 f"(call_timeout)")
-            response = result_future.result()
-        finally:
-            self._job = None
-        if response.status == GoalStatus.STATUS_ABORTED:
-            raise RunAborted(f"the '{name}' job was aborted by its node at movement "
-                             f"{self.count}: its log says why")
-        if response.status not in (GoalStatus.STATUS_SUCCEEDED, GoalStatus.STATUS_CANCELED):
-            # e.g. unknown: the server no longer knew the job (ros_glue.JOB_RESULT_SECONDS)
-            raise RunAborted(f"the '{name}' job at movement {self.count} ended with status "
-                             f"{response.status}, without a result: its movements are unknown")
-        result = response.result
+        held = self.pending or (self.pace is not None and self.pace.paused)
+        result = await self.job.run(client, goal, name, self.count, self.p["call_timeout"],
+                                    cut_at_once=bool(held) and name == "reach_goal")
         self.count += result.movements_used
         return result
 
@@ -557,16 +434,9 @@ class SocialInteraction(AsyncNode):
             teaching_set_index=demo.teaching_set_index, source=demo.source,
             content=demo.content, help_request=demo.help_request))
 
-    def _refuse(self, demo: Demonstration, why: str, always: bool = False) -> None:
-        """A demonstration the learner does not take: said in the log and on run_status
-        (a burst: the first 20 and every 100th, then a total at the end; one given once the
-        budget was spent, always)."""
-        self.refused += 1
-        line = f"demonstration {demo.index} ({demo.source}) refused: {why}"
-        always = always or demo.movement_index >= self.total  # a late one is always said
-        if always or self.refused <= 20 or self.refused % 100 == 0:
-            self.get_logger().warning(line + f" ({self.refused} refused so far)")
-            self._publish_status(RunStatus.STATE_RUNNING, line)
+    def _say_refusal(self, line: str) -> None:
+        self.get_logger().warning(line)
+        self._publish_status(RunStatus.STATE_RUNNING, line)
 
     # --- progress -------------------------------------------------------------------------
     def _progress(self) -> None:

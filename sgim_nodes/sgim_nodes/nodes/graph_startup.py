@@ -1,0 +1,96 @@
+"""The arbiter's start: wait until every node of the run serves, publishes and listens.
+
+A run that starts before a listener has matched every publisher loses records silently (a late
+DDS match; sgim_ros/ready.py), and one that starts before a server is up fails on its first
+call. So the arbiter waits, within one deadline, for: the servers it calls, the publishers it
+must hear (evaluator, automatic teacher), and each listener's `*_ready` service saying it has
+matched every publisher the arbiter sees. Each failure names the node to look at.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+from rclpy.node import Node
+from rclpy.task import Future
+
+from sgim_msgs.srv import RecorderReady
+from sgim_nodes.bag.types import RECORDED_TOPICS
+from sgim_ros.entry import first_of
+
+POLL_SECONDS = 0.1
+READY_CALL_SECONDS = 5.0  # one ready call; a request lost in discovery is asked again
+
+
+class RunAborted(RuntimeError):
+    """The run cannot go on (a node is missing or silent); the message says which."""
+
+
+@dataclass
+class ExpectedGraph:
+    """What the run needs before its first movement."""
+
+    servers: list[tuple[object, str]] = field(default_factory=list)  # (client, name)
+    publishers: list[str] = field(default_factory=list)  # topics someone must publish
+    listeners: list[tuple[str, str]] = field(default_factory=list)  # (ready service, who)
+
+
+async def call_bounded(node: Node, client, request, name: str, timeout: float,
+                       fatal: bool = True):
+    """A service call that gives up after `timeout`: None, or RunAborted naming the service
+    when `fatal`."""
+    call = client.call_async(request)
+    if await first_of(node, call, timeout):
+        return call.result()
+    client.remove_pending_request(call)
+    if fatal:
+        raise RunAborted(f"no answer from {name} after {timeout:g} s: is its node running?")
+    return None
+
+
+async def _sleep(node: Node, seconds: float) -> None:
+    await first_of(node, Future(), seconds)
+
+
+async def wait_for_graph(node: Node, expected: ExpectedGraph, timeout: float,
+                         settle_time: float) -> None:
+    """Return once the graph is complete, then `settle_time` later; RunAborted after
+    `timeout` seconds, naming what is missing."""
+    deadline = time.monotonic() + timeout
+    for client, name in expected.servers:
+        ready = getattr(client, "server_is_ready", None) or client.service_is_ready
+        while not ready():
+            if time.monotonic() > deadline:
+                raise RunAborted(f"no '{name}' server after {timeout:g} s: is its node up?")
+            await _sleep(node, POLL_SECONDS)
+    for topic in expected.publishers:
+        while node.count_publishers(topic) < 1:
+            if time.monotonic() > deadline:
+                raise RunAborted(f"nobody publishes '{topic}' after {timeout:g} s: is its "
+                                 "node (evaluator or teacher) up?")
+            await _sleep(node, POLL_SECONDS)
+    for service, who in expected.listeners:
+        await _wait_until_listening(node, service, who, deadline, timeout)
+    await _sleep(node, settle_time)
+
+
+async def _wait_until_listening(node: Node, service: str, who: str, deadline: float,
+                                timeout: float) -> None:
+    """Ask `service` until it says its node has matched every publisher we see."""
+    ready = node.create_client(RecorderReady, service)
+    name = service.removesuffix("_ready")
+    why = f"no {service} service: is {who} up?"
+    while time.monotonic() < deadline:
+        if ready.service_is_ready():
+            request = RecorderReady.Request(topics=list(RECORDED_TOPICS))
+            request.publishers = [node.count_publishers(t) for t in RECORDED_TOPICS]
+            seconds = min(READY_CALL_SECONDS, max(POLL_SECONDS, deadline - time.monotonic()))
+            reply = await call_bounded(node, ready, request, service, seconds, fatal=False)
+            if reply is not None and reply.ready:
+                node.destroy_client(ready)
+                return
+            why = (f"the {name} did not answer {service}" if reply is None
+                   else f"the {name} is not ready: {reply.message}")
+        await _sleep(node, POLL_SECONDS)
+    raise RunAborted(f"after {timeout:g} s waiting for {service}, {why}")
