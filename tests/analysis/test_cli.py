@@ -98,3 +98,17 @@ def test_help_describes_the_outputs(capsys: pytest.CaptureFixture) -> None:
     assert done.value.code == 0
     text = capsys.readouterr().out
     assert all(name in text for name in FILES)
+
+
+def test_reports_name_a_study_inside_the_working_directory_relatively(
+        study: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A report committed to a repository names the study folder as the repository sees it;
+    one outside the working directory keeps its absolute path."""
+    out = tmp_path / "rel"
+    monkeypatch.chdir(study.parent)
+    assert main([study.name, "--out", str(out), "--times", "10"]) == 0
+    assert (out / "results.md").read_text().startswith(f"# Study results: {study.name}\n")
+    assert json.loads((out / "results.json").read_text())["study"] == study.name
+    monkeypatch.chdir(tmp_path / "rel")
+    assert main([str(study), "--out", str(out), "--times", "10"]) == 0
+    assert json.loads((out / "results.json").read_text())["study"] == str(study.resolve())
