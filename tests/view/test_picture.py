@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from sgim_nodes.core.environment import PROCESS_CODES
 from sgim_nodes.core.teaching import Teacher
 from sgim_nodes.view.picture import (
     INTEREST_STOPS,
@@ -30,6 +31,18 @@ def test_landings_failures_goal_and_imitations():
                                                             [1, 3])
     assert pic.failed == 1 and pic.count == 3 and pic.goal == (0.5, 0.5)
     assert pic.demonstrations[0].imitated_from == 3
+
+
+def test_a_means_only_demonstration_is_kept_and_matched_to_its_goal_free_imitation():
+    pic = picture()
+    pic.add_demonstration(DemonstrationSeen(1, 0, (), -1, "automatic", content="means-only"))
+    pic.add_demonstration(DemonstrationSeen(2, 0, (), -1, "automatic"))  # nothing to show
+    assert [d.index for d in pic.demonstrations] == [1]
+    pic.add_movement(1, 0, True, [0.1, 0.2], [0.1, 0.25])  # a goal attempt: not an imitation
+    pic.add_movement(2, PROCESS_CODES["imitation"], True, [0.3, 0.3], [])
+    pic.add_movement(3, PROCESS_CODES["imitation"], True, [0.3, 0.31], [])
+    assert pic.demonstrations[0].imitated_from == 2
+    assert pic.goal == (0.1, 0.25)  # an imitation without a goal leaves the goal as it was
 
 
 def test_teaching_goals_are_judged_by_the_teachers_rule_only_when_landings_change():

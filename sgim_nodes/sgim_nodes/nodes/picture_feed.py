@@ -20,7 +20,7 @@ from sgim_msgs.msg import (
     RegionMap,
     RunStatus,
 )
-from sgim_nodes.core.teaching import DEFAULT_TOLERANCE_NOISE
+from sgim_nodes.core.teaching import DEFAULT_TOLERANCE_NOISE, MEANS_AND_GOAL
 from sgim_nodes.view.picture import DemonstrationSeen, Leaf, LivePicture
 from sgim_ros import qos
 from sgim_ros.params import Param, non_negative, positive
@@ -76,7 +76,8 @@ def follow(node: Node, picture: LivePicture, lock: threading.Lock | None = None)
         with guard:
             picture.add_demonstration(DemonstrationSeen(
                 int(msg.index), int(msg.movement_index), tuple(float(v) for v in msg.outcome),
-                int(msg.teaching_set_index), str(msg.source)))
+                int(msg.teaching_set_index), str(msg.source),
+                content=str(msg.content) or MEANS_AND_GOAL))
 
     def on_status(msg: RunStatus) -> None:
         with guard:

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from sgim_nodes.core.environment import PROCESS_CODES
-from sgim_nodes.core.teaching import Teacher
+from sgim_nodes.core.teaching import MEANS_AND_GOAL, MEANS_ONLY, Teacher
 
 # Colours shared by the page and the markers (RGB 0-255), one per Movement.PROCESS_* code.
 PROCESS_COLOURS: dict[int, tuple[int, int, int]] = {
@@ -72,7 +72,8 @@ class DemonstrationSeen:
     outcome: tuple[float, ...]
     teaching_set_index: int
     source: str
-    imitated_from: int = 0  # first imitation movement aimed at its outcome; 0: not yet
+    imitated_from: int = 0  # its first imitation movement; 0: not yet
+    content: str = MEANS_AND_GOAL  # what it shows (core/teaching.py); means-only: no outcome
 
 
 @dataclass
@@ -120,8 +121,8 @@ class LivePicture:
             self.failed += 1
         if len(goal) == 2:
             self.set_goal(goal)
-            if process == PROCESS_CODES["imitation"]:
-                self._note_imitation(int(index), goal)
+        if process == PROCESS_CODES["imitation"]:
+            self._note_imitation(int(index), goal)
         self.changed_at = time.monotonic()
 
     def set_goal(self, point: Sequence[float]) -> None:
@@ -140,7 +141,9 @@ class LivePicture:
             self.evaluations.sort()
 
     def add_demonstration(self, demo: DemonstrationSeen) -> None:
-        if len(demo.outcome) == 2:
+        """Keep a demonstration that shows something: an outcome, or (means-only) an action
+        whose outcome the learner will see by imitating it."""
+        if len(demo.outcome) == 2 or demo.content == MEANS_ONLY:
             self.demonstrations.append(demo)
 
     def set_status(self, learner: str, count: int, total: int, state: str, message: str) -> None:
@@ -151,10 +154,14 @@ class LivePicture:
             self.run_message = message
 
     def _note_imitation(self, index: int, goal: Sequence[float]) -> None:
+        """The latest demonstration not yet imitated that this imitation aims at: the one of
+        its outcome, or, for an imitation without a goal, a means-only one."""
         for demo in reversed(self.demonstrations):
             if demo.imitated_from:
                 break
-            if np.allclose(demo.outcome, goal):
+            aims_at = (np.allclose(demo.outcome, goal) if len(goal) == 2 == len(demo.outcome)
+                       else not len(goal) and demo.content == MEANS_ONLY)
+            if aims_at:
                 demo.imitated_from = index
                 break
 

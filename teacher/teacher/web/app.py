@@ -134,7 +134,8 @@ class WebTeacher:
             reply["demonstrations"] = [
                 {"index": d.index, "movement": d.movement_index, "outcome": d.outcome,
                  "teaching_set_index": d.teaching_set_index, "source": d.source,
-                 "imitated_from": d.imitated_from} for d in pic.demonstrations[-10:]]
+                 "imitated_from": d.imitated_from, "content": d.content}
+                for d in pic.demonstrations[-10:]]
             return reply
 
     def _pace_json(self) -> dict[str, Any]:
