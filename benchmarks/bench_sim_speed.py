@@ -20,7 +20,7 @@ import time
 
 import numpy as np
 
-from sim_bridge.fishing_world import FishingWorld
+from sim_bridge.fishing_world import FishingWorld, _quiet_c_stdout
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -32,10 +32,15 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--profile", action="store_true", help="print the top cProfile entries")
     parser.add_argument("--accuracy", type=int, default=0,
                         help="casts compared with a converged solver (0: skip)")
+    parser.add_argument("--solver", choices=("shipped", "dantzig"), default="shipped",
+                        help="constraint solver: the world's own, or MLCP solved by Dantzig's "
+                        "pivoting (measured, not applied: README_world.md, Speed)")
     args = parser.parse_args(argv)
     if args.casts < 1 or args.repeat < 1:
         parser.error("--casts and --repeat must be >= 1")
     world = FishingWorld(seed=args.seed)
+    if args.solver == "dantzig":
+        use_dantzig(world)
     acts = np.random.default_rng(args.seed).uniform(-1, 1, (args.casts, world.action_dim))
     world.execute(acts[0])  # warm-up
     prof = cProfile.Profile() if args.profile else None
@@ -59,6 +64,17 @@ def main(argv: list[str] | None = None) -> None:
         pstats.Stats(prof).sort_stats("tottime").print_stats(10)
     if args.accuracy > 0:
         print(solver_accuracy(args.accuracy, args.seed))
+
+
+def use_dantzig(world: FishingWorld) -> None:
+    """Switch a built world to the MLCP solved by Dantzig's pivoting (its rest state saved
+    again, as each cast restores it)."""
+    import pybullet as pb
+
+    with _quiet_c_stdout():  # pybullet prints "switched solver" from C
+        pb.setPhysicsEngineParameter(constraintSolverType=pb.CONSTRAINT_SOLVER_LCP_DANTZIG,
+                                     physicsClientId=world._client)
+    world._state = pb.saveState(physicsClientId=world._client)
 
 
 def solver_accuracy(n: int, seed: int) -> str:
