@@ -11,6 +11,7 @@ workspace environment:
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
 import resource
@@ -87,6 +88,26 @@ def children_cpu() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
+def critical_path(run, start: int, end: int) -> str:
+    """Median wall times between records of movements start..end (bag stamps): from one
+    movement to the next of the same goal, to the first of the next goal, and from a goal's
+    previous movement to the goal generator's answer (what a goal waits for)."""
+    moves = [m for m in run.movements if start <= m.index <= end]
+    same, new = [], []
+    for a, b in itertools.pairwise(moves):
+        if a.goal_index and b.goal_index:
+            (same if a.goal_index == b.goal_index else new).append(b.stamp_ns - a.stamp_ns)
+    stamp = {m.index: m.stamp_ns for m in moves}
+    chosen = [g.stamp_ns - stamp[g.movement_index] for g in run.goals
+              if g.movement_index in stamp]
+
+    def median(ns: list[int]) -> str:
+        return f"{np.median(ns) * 1e-6:.1f} ms" if ns else "-"
+
+    return (f"wall time between movements of one goal {median(same)}, between two goals "
+            f"{median(new)}; a goal chosen {median(chosen)} after the movement before it")
+
+
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--learner", default="sgim-d")
@@ -158,6 +179,8 @@ def main() -> int:
                   "movement:")
             for name, cpu in window.items():
                 print(f"  {name:20s} {1000 * cpu / max(moved, 1):6.2f} ms per movement")
+        print(f"critical path (medians, movements {a + 1}-{b + 1}): "
+              f"{critical_path(run, a + 1, b + 1)}")
     print(f"outputs in {out}")
     return 0
 

@@ -241,6 +241,18 @@ def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner)
         counts = [m.goal_count for m in maps]
         assert counts == sorted(counts) and counts[-1] == len(run.competences) > 10
         assert len(run.goals) >= len(run.competences) - len(run.demonstrations)
+        # The goal generator folds the competences into its own tree: each goal's region is
+        # the leaf holding it in the interest computer's map of the goals folded before it.
+        by_count = {m.goal_count: m for m in maps}
+        checked = 0
+        for goal in run.goals:
+            folded = sum(c.movement_index <= goal.movement_index for c in run.competences)
+            if folded in by_count:
+                leaf = next(r for r in by_count[folded].leaves
+                            if np.all(goal.point >= r.lower) and np.all(goal.point <= r.upper))
+                assert goal.region_id == leaf.id, goal.index
+                checked += 1
+        assert checked > len(run.goals) // 2, (checked, len(run.goals))
     if learner in ("sgim-d", "demo-only"):
         demos = [d for d in run.demonstrations if len(d.action)]
         assert [d.movement_index for d in run.demonstrations] == list(range(0, MOVEMENTS,

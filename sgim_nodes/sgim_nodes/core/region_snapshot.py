@@ -8,6 +8,7 @@ from a snapshot is the very goal the tree itself would give for the same random 
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -83,32 +84,45 @@ class RegionIds:
         return self._ids[key]
 
 
-def snapshot(tree: RegionTree, ids: RegionIds, goal_count: int) -> RegionSnapshot:
-    """Inner regions breadth-first (root first), then the leaves in tree.leaves order, which is
-    the order GoalSelector indexes them by; every parent comes before its children."""
-    parents: dict[int, int] = {id(tree.root): -1}
-    counts: dict[int, int] = {}
-    _count_goals(tree.root, counts)
-    inner: list[RegionSummary] = []
-    queue = [tree.root]
+def map_order(tree: RegionTree) -> list[tuple[Region, Region | None]]:
+    """(region, parent) for every region in the order of a map: inner regions breadth-first
+    (root first), then the leaves in tree.leaves order, which is the order GoalSelector
+    indexes them by; every parent comes before its children. Region ids are handed out in
+    this order, so that every process that folds the same goals names the regions alike."""
+    order: list[tuple[Region, Region | None]] = []
+    queue: list[tuple[Region, Region | None]] = [(tree.root, None)]
     while queue:
-        region = queue.pop(0)
+        region, parent = queue.pop(0)
         if region.children is None:
             continue
-        inner.append(_summary(region, ids, parents[id(region)], tree, counts))
-        for child in region.children:
-            parents[id(child)] = ids(region)
-            queue.append(child)
-    leaves = [_summary(leaf, ids, parents[id(leaf)], tree, counts) for leaf in tree.leaves]
-    return RegionSnapshot(inner + leaves, goal_count, len(inner))
+        order.append((region, parent))
+        queue.extend((child, region) for child in region.children)
+    parents = {id(child): region for region, _ in order for child in region.children}
+    order.extend((leaf, parents.get(id(leaf))) for leaf in tree.leaves)
+    return order
+
+
+def snapshot(tree: RegionTree, ids: RegionIds, goal_count: int,
+             interests: Mapping[int, float] | None = None) -> RegionSnapshot:
+    """Every region in map_order. `interests` (by id() of each leaf) spares recomputing the
+    leaves' interests when the caller keeps them (live_regions.py)."""
+    counts: dict[int, int] = {}
+    _count_goals(tree.root, counts)
+    regions = [_summary(region, ids, -1 if parent is None else ids(parent), tree, counts,
+                        interests) for region, parent in map_order(tree)]
+    inner = sum(1 for r in regions if not r.is_leaf)
+    return RegionSnapshot(regions, goal_count, inner)
 
 
 def _summary(region: Region, ids: RegionIds, parent: int, tree: RegionTree,
-             counts: dict[int, int]) -> RegionSummary:
+             counts: dict[int, int], interests: Mapping[int, float] | None) -> RegionSummary:
     least = None
     if region.goals:
         least = np.array(region.goals[int(np.argmin(region.competences))], dtype=float)
-    interest = region.interest(tree.zeta, tree.noise_correction) if region.is_leaf else 0.0
+    interest = 0.0
+    if region.is_leaf:
+        interest = (interests[id(region)] if interests is not None
+                    else region.interest(tree.zeta, tree.noise_correction))
     return RegionSummary(ids(region), parent, region.low.copy(), region.high.copy(), interest,
                          counts[id(region)], region.is_leaf, least)
 

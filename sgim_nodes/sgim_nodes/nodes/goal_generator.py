@@ -1,32 +1,36 @@
-"""goal_generator: self-generated goals by the three SAGG-RIAC modes, from the region map.
+"""goal_generator: self-generated goals by the three SAGG-RIAC modes, from its region tree.
 
-The arbiter asks for each goal through `choose_goal`, saying how many attempted goals the map
-must already reflect; the answer waits for that map, so the choice never depends on message
-timing, and the random stream "goals" makes it the very goal the single-process learner draws.
+It folds every competence into its own region tree, as the interest computer does into the one
+whose map it publishes: a goal waits for one small record from the explorer, not for a whole
+map rebuilt, sent and checked by a second process (the map grows with the run; README, "How a
+run flows"). The arbiter asks for each goal through `choose_goal`,
+saying how many attempted goals the tree must already hold; the answer waits for them, so the
+choice never depends on message timing, and the random stream "goals" makes it the very goal
+the single-process learner draws. Region ids are named in the map's order
+(core/live_regions.py), so a Goal's region_id is that of the interest computer's map.
 
 Interfaces:
-  subscribes  region_map  (sgim_msgs/RegionMap)
+  subscribes  competences (sgim_msgs/Competence)
   publishes   goals       (sgim_msgs/Goal)
-  serves      choose_goal (sgim_msgs/srv/ChooseGoal)
-Parameters: the common ones, p_mode1..3 and mode3_radius_noise of LearnerConfig, map_timeout.
-The random-goals learner draws every goal uniformly (mode 2). A request that names a
-`demonstrated` outcome (a goal-only demonstration, issue 14) adopts it as the goal
-(MODE_DEMONSTRATION), drawing nothing, as the single-process learner adopts it.
+  serves      choose_goal (sgim_msgs/srv/ChooseGoal), goal_generator_ready (RecorderReady)
+Parameters: the common ones, the region-tree ones and p_mode1..3, mode3_radius_noise of
+LearnerConfig, map_timeout. The random-goals learner draws every goal uniformly (mode 2). A
+request that names a `demonstrated` outcome (a goal-only demonstration, issue 14) adopts it as
+the goal (MODE_DEMONSTRATION), drawing nothing, as the single-process learner adopts it.
 """
 
 from __future__ import annotations
 
-import numpy as np
 from rclpy.task import Future
 
-from sgim_msgs.msg import Goal, RegionMap
+from sgim_msgs.msg import Competence, Goal
 from sgim_msgs.srv import ChooseGoal
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.bag.validation import Limits, LiveGate
 from sgim_nodes.core.goal_selection import GoalSelector
-from sgim_nodes.core.learners import goal_mode_probabilities
+from sgim_nodes.core.learners import goal_mode_probabilities, region_tree_for
+from sgim_nodes.core.live_regions import LiveRegions
 from sgim_nodes.core.random_streams import component_rng
-from sgim_nodes.core.region_snapshot import RegionSnapshot
 from sgim_nodes.nodes.ros_glue import (
     AsyncNode,
     check_vector,
@@ -34,18 +38,18 @@ from sgim_nodes.nodes.ros_glue import (
     floats,
     learner_node_params,
     run_node,
-    snapshot_from_msg,
     vec,
     world_scale,
 )
 from sgim_ros import qos
 from sgim_ros.entry import first_of
 from sgim_ros.params import Param, positive
+from sgim_ros.ready import serve_ready
 
 MODE_CODES = {1: Goal.MODE_INTEREST_REGION, 2: Goal.MODE_UNIFORM, 3: Goal.MODE_LEAST_COMPETENT}
 PARAMS = learner_node_params(
-    Param("map_timeout", 60.0, "seconds to wait for a region map that reflects the requested "
-          "number of goals", positive),
+    Param("map_timeout", 60.0, "seconds to wait until the region tree holds the requested "
+          "number of attempted goals", positive),
 )
 
 
@@ -56,44 +60,46 @@ class GoalGenerator(AsyncNode):
         self.timeout = values["map_timeout"]
         self.outcome_size = values["outcome_size"]
         self.rng = component_rng(values["seed"], "goals")
-        self.probabilities = goal_mode_probabilities(c, values["learner"])
-        self.radius = c.distances(world_scale(values)).mode3_radius
-        self.snapshot: RegionSnapshot | None = None
         self.goal_count = 0
+        tree, folded = region_tree_for(c, world_scale(values)), 0
         if values["resume_from"]:
-            self.goal_count = resume_point(values["resume_from"], c,
-                                 values["resume_segments"]).goal_index
+            point = resume_point(values["resume_from"], c, values["resume_segments"])
+            self.goal_count = point.goal_index
+            tree, folded = point.state.tree, point.state.n_competences
+        self.regions = LiveRegions(tree, folded)
+        self.selector = GoalSelector(self.regions, goal_mode_probabilities(c, values["learner"]),
+                                     c.distances(world_scale(values)).mode3_radius)
         self._waiters: list[tuple[int, Future]] = []
         self.gate = LiveGate(self.get_logger().error,
                              Limits(values["action_size"], values["outcome_size"]))
         self._goals = self.create_publisher(Goal, "goals", qos.RECORDS)
-        self.create_subscription(RegionMap, "region_map", self._on_map, qos.LATEST_STATE)
+        competences = self.create_subscription(Competence, "competences", self._on_competence,
+                                               qos.RECORDS)
+        # A competence missed before the DDS match would stall every later goal.
+        serve_ready(self, "goal_generator_ready", {"competences": competences})
         self.create_service(ChooseGoal, "choose_goal", self._choose)
 
-    def _on_map(self, msg: RegionMap) -> None:
-        if self.gate.check("region_map", msg):  # the readers' checks: logged, not used
+    def _on_competence(self, msg: Competence) -> None:
+        if self.gate.check("competences", msg):  # the readers' checks: logged, not folded
             return
-        if self.snapshot is not None and msg.goal_count < self.snapshot.goal_count:
-            return  # an older map arriving late never replaces a newer one
-        self.snapshot = snapshot_from_msg(msg)
-        for needed, future in list(self._waiters):
-            if self.snapshot.goal_count >= needed and not future.done():
+        self.regions.add(vec(msg.goal), float(msg.competence))
+        for needed, future in self._waiters:
+            if self.regions.goal_count >= needed and not future.done():
                 future.set_result(True)
         self._waiters = [(n, f) for n, f in self._waiters if not f.done()]
 
     async def _choose(self, request: ChooseGoal.Request, response: ChooseGoal.Response):
-        if self.snapshot is None or self.snapshot.goal_count < request.min_goal_count:
+        if self.regions.goal_count < request.min_goal_count:
             ready = Future(executor=self.executor)
             self._waiters.append((request.min_goal_count, ready))
             if not await first_of(self, ready, self.timeout):
                 self._waiters = [(n, f) for n, f in self._waiters if f is not ready]
-                have = -1 if self.snapshot is None else self.snapshot.goal_count
                 response.ok = False
-                response.message = (f"no region map with {request.min_goal_count} goals after "
-                                    f"{self.timeout} s (latest has {have}): is interest_computer "
+                response.message = (f"no competence of attempted goal {request.min_goal_count} "
+                                    f"after {self.timeout} s (the tree holds "
+                                    f"{self.regions.goal_count}): is low_level_explorer "
                                     "running?")
                 return response
-        snap = self.snapshot
         if len(request.demonstrated):
             why = check_vector(request.demonstrated, self.outcome_size, "demonstrated goal",
                                bound=1.0)
@@ -102,14 +108,12 @@ class GoalGenerator(AsyncNode):
                 return response
             point, mode = vec(request.demonstrated), Goal.MODE_DEMONSTRATION
         else:
-            choice = GoalSelector(snap, self.probabilities, self.radius).sample(self.rng)
+            choice = self.selector.sample(self.rng)
             point, mode = choice.goal, MODE_CODES[choice.mode]
         self.goal_count += 1
-        leaf = next((r for r in snap.leaves if np.all(point >= r.low)
-                     and np.all(point <= r.high)), None)
         goal = Goal(stamp=self.get_clock().now().to_msg(), index=self.goal_count,
                     movement_index=request.movement_index, point=floats(point),
-                    region_id=-1 if leaf is None else leaf.id, mode=mode)
+                    region_id=self.regions.region_id(point), mode=mode)
         self._goals.publish(goal)
         response.ok, response.goal = True, goal
         return response

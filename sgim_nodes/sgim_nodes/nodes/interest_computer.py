@@ -2,8 +2,9 @@
 
 Competences come in order (keep-all QoS) and each is added to the core RegionTree, which
 splits regions as they fill; after every record the whole map is published (latest-state
-QoS), with the number of goals folded in, so that the goal generator can wait for the map
-that reflects every goal attempted so far.
+QoS), with the number of goals folded in, for the recorder, the markers and the plots. The
+goal generator folds the same records into its own tree (core/live_regions.py names the
+regions alike in both), so no goal waits for this map.
 
 Interfaces:
   subscribes  competences (sgim_msgs/Competence)
@@ -19,8 +20,7 @@ from sgim_msgs.msg import Competence, RegionMap
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.bag.validation import Limits, LiveGate
 from sgim_nodes.core.learners import region_tree_for
-from sgim_nodes.core.region_snapshot import RegionIds, snapshot
-from sgim_nodes.core.region_tree import RegionTree
+from sgim_nodes.core.live_regions import LiveRegions
 from sgim_nodes.nodes.ros_glue import (
     declare_learner,
     learner_node_params,
@@ -39,13 +39,11 @@ class InterestComputer(Node):
         super().__init__("interest_computer")
         values, c = declare_learner(self, PARAMS)
         self.outcome_size = values["outcome_size"]
-        self.tree: RegionTree = region_tree_for(c, world_scale(values))
-        self.ids = RegionIds()
-        self.goal_count = 0
+        tree, folded = region_tree_for(c, world_scale(values)), 0
         if values["resume_from"]:
-            point = resume_point(values["resume_from"], c,
-                                 values["resume_segments"])
-            self.tree, self.goal_count = point.state.tree, point.state.n_competences
+            point = resume_point(values["resume_from"], c, values["resume_segments"])
+            tree, folded = point.state.tree, point.state.n_competences
+        self.regions = LiveRegions(tree, folded)
         self.gate = LiveGate(self.get_logger().error,
                              Limits(values["action_size"], self.outcome_size))
         self._map = self.create_publisher(RegionMap, "region_map", qos.LATEST_STATE)
@@ -55,13 +53,12 @@ class InterestComputer(Node):
     def _on_competence(self, msg: Competence) -> None:
         if self.gate.check("competences", msg):  # the readers' checks: logged, not folded
             return
-        self.tree.add(vec(msg.goal), float(msg.competence))
-        self.goal_count += 1
+        self.regions.add(vec(msg.goal), float(msg.competence))
         self._publish(msg.movement_index)
 
     def _publish(self, movement_index: int) -> None:
-        snap = snapshot(self.tree, self.ids, self.goal_count)
-        self._map.publish(region_map_msg(snap, movement_index, self.get_clock().now().to_msg()))
+        self._map.publish(region_map_msg(self.regions.snapshot(), movement_index,
+                                         self.get_clock().now().to_msg()))
 
 
 def main(args: list[str] | None = None) -> int:

@@ -266,6 +266,7 @@ class SocialInteraction(AsyncNode):
                                                             "wait_for_recorder to false)"))
         if self.learner in GOAL_BABBLERS:
             expected.listeners.append(("explorer_ready", "the low_level_explorer node"))
+            expected.listeners.append(("goal_generator_ready", "the goal_generator node"))
         if self.social:
             expected.listeners.append(("imitation_ready", "the imitation node"))
         if self.automatic:
