@@ -107,11 +107,15 @@ def test_ctrl_c_with_output_piped_stops_every_node(ros_processes, tmp_path):
     wait_for(lambda: progress(run_dir) > 0, 120, "the run to make movements")
     child.stdout.close()  # the reader (tee) is gone: every write now meets a broken pipe
     child.send_signal(signal.SIGINT)
-    assert child.wait(timeout=120) == 130
-    assert not run_node_pids(run_dir)
+    code = child.wait(timeout=120)
     meta = metadata(run_dir)
-    assert meta["outcome"].startswith("interrupted by SIGINT")
     log = (run_dir / "logs" / "launcher.log").read_text()
+    # Seen once under load: exit 1 although metadata.yaml said 130; the terminal output is
+    # gone (the pipe is closed), so a failure says what the run folder holds.
+    assert code == 130, (f"exit code {code}; metadata: {meta.get('outcome')!r}, exit_code "
+                         f"{meta.get('exit_code')}; launcher.log ends: {log[-600:]!r}")
+    assert not run_node_pids(run_dir)
+    assert meta["outcome"].startswith("interrupted by SIGINT")
     assert "interrupted by SIGINT" in log  # what the terminal missed is in the run's log
 
 
