@@ -39,8 +39,8 @@ def main(argv: list[str] | None = None) -> None:
     if args.casts < 1 or args.repeat < 1:
         parser.error("--casts and --repeat must be >= 1")
     world = FishingWorld(seed=args.seed)
-    if args.solver == "dantzig":
-        use_dantzig(world)
+    if args.solver != "shipped":
+        set_solver(world, args.solver)
     acts = np.random.default_rng(args.seed).uniform(-1, 1, (args.casts, world.action_dim))
     world.execute(acts[0])  # warm-up
     prof = cProfile.Profile() if args.profile else None
@@ -63,38 +63,42 @@ def main(argv: list[str] | None = None) -> None:
     if prof:
         pstats.Stats(prof).sort_stats("tottime").print_stats(10)
     if args.accuracy > 0:
-        print(solver_accuracy(args.accuracy, args.seed))
+        print(solver_accuracy(args.accuracy, args.seed, args.solver))
 
 
-def use_dantzig(world: FishingWorld) -> None:
-    """Switch a built world to the MLCP solved by Dantzig's pivoting (its rest state saved
-    again, as each cast restores it)."""
+def set_solver(world: FishingWorld, solver: str, sweeps: int = 50) -> None:
+    """Switch a built world's constraint solver: ``dantzig`` (MLCP solved by Dantzig's
+    pivoting) or ``pgs`` (MLCP with ``sweeps`` projected Gauss-Seidel sweeps); the rest state
+    is saved again, as each cast restores it."""
     import pybullet as pb
 
+    kind = {"dantzig": pb.CONSTRAINT_SOLVER_LCP_DANTZIG, "pgs": pb.CONSTRAINT_SOLVER_LCP_PGS}
     with _quiet_c_stdout():  # pybullet prints "switched solver" from C
-        pb.setPhysicsEngineParameter(constraintSolverType=pb.CONSTRAINT_SOLVER_LCP_DANTZIG,
-                                     physicsClientId=world._client)
+        pb.setPhysicsEngineParameter(constraintSolverType=kind[solver],
+                                     numSolverIterations=sweeps, physicsClientId=world._client)
     world._state = pb.saveState(physicsClientId=world._client)
 
 
-def solver_accuracy(n: int, seed: int) -> str:
-    """Touch-down distance (normalised units) between this world and a converged solver."""
-    import pybullet as pb
-
+def solver_accuracy(n: int, seed: int, solver: str = "shipped") -> str:
+    """Touch-down distance (normalised units) between the world with `solver` and one whose
+    solver has converged (MLCP with 300 Gauss-Seidel sweeps)."""
     from sim_bridge.scaling import world_to_outcome
 
     acts = np.random.default_rng(seed + 1).uniform(-1, 1, (n, 24))
     pts = []
-    for sweeps in (None, 300):
+    for reference in (False, True):
         with FishingWorld(seed=seed, noise=0.0) as w:
-            if sweeps:
-                pb.setPhysicsEngineParameter(numSolverIterations=sweeps, physicsClientId=w._client)
+            if reference:
+                set_solver(w, "pgs", sweeps=300)
+            elif solver != "shipped":
+                set_solver(w, solver)
             pts.append(np.array([world_to_outcome(r.world_point) if r.world_point is not None
                                  else (np.nan, np.nan) for r in map(w.execute, acts)]))
     d = np.linalg.norm(pts[0] - pts[1], axis=1)
     d = d[np.isfinite(d)]
-    return (f"solver vs 300 sweeps ({len(d)} noise-free touch-downs): median {np.median(d):.5f}, "
-            f"p90 {np.percentile(d, 90):.5f}, p99 {np.percentile(d, 99):.4f}, max {d.max():.4f}")
+    return (f"{solver} solver vs 300 sweeps ({len(d)} noise-free touch-downs): median "
+            f"{np.median(d):.5f}, p90 {np.percentile(d, 90):.5f}, p99 "
+            f"{np.percentile(d, 99):.4f}, max {d.max():.4f}")
 
 
 if __name__ == "__main__":
