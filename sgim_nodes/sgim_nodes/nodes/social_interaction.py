@@ -166,7 +166,6 @@ class SocialInteraction(AsyncNode):
             teaching_set_size=teaching_set_size(values["teaching_set"] or None)))
         self.inbox = DemonstrationInbox(self.gate, self.total, self.automatic, self.asks,
                                         self._say_refusal)
-        self.pending = self.inbox.pending  # human teachers' demonstrations, in order
         self._competences = self.create_publisher(Competence, "competences", qos.RECORDS)
         self.create_subscription(Demonstration, "demonstrations", self._on_demo, qos.RECORDS)
         self.create_subscription(Evaluation, "evaluations", self._on_evaluation, qos.RECORDS)
@@ -214,9 +213,6 @@ class SocialInteraction(AsyncNode):
             self.pace.notify()
         self.waits.check()
 
-    async def _until(self, condition, timeout: float, what: str) -> None:
-        await self.waits.until(condition, timeout, what)
-
     # --- the run ----------------------------------------------------------------------------
     async def _start(self) -> None:
         self._start_timer.cancel()
@@ -229,9 +225,9 @@ class SocialInteraction(AsyncNode):
             self.inbox.refuse_waiting()
             self._publish_status(RunStatus.STATE_RUNNING, "movement budget spent")
             if self.p["wait_for_evaluation"]:
-                await self._until(lambda: self.total in self.evaluated,
-                                  self.p["evaluation_timeout"],
-                                  f"the evaluation at movement {self.total} (evaluator)")
+                await self.waits.until(lambda: self.total in self.evaluated,
+                                       self.p["evaluation_timeout"],
+                                       f"the evaluation at movement {self.total} (evaluator)")
             if self.inbox.refused:
                 self._publish_status(RunStatus.STATE_RUNNING, f"{self.inbox.refused} "
                                      "demonstrations refused in all (see the arbiter's log)")
@@ -255,22 +251,22 @@ class SocialInteraction(AsyncNode):
                 expected.servers.append((self.register_client, "register_demonstration"))
         if self.social:
             expected.servers.append((self.imitate, "imitate"))
-        # The evaluator and the automatic teacher must hear the start too.
-        if self.p["wait_for_evaluation"]:
-            expected.publishers.append("evaluations")
-            expected.listeners.append(("evaluator_ready", "the evaluator node"))
-        if self.automatic:
-            expected.publishers.append("demonstrations")
-        if self.p["wait_for_recorder"]:
-            expected.listeners.insert(0, ("recorder_ready", "the recorder node (or set "
-                                                            "wait_for_recorder to false)"))
-        if self.learner in GOAL_BABBLERS:
-            expected.listeners.append(("explorer_ready", "the low_level_explorer node"))
-            expected.listeners.append(("goal_generator_ready", "the goal_generator node"))
-        if self.social:
-            expected.listeners.append(("imitation_ready", "the imitation node"))
-        if self.automatic:
-            expected.listeners.append(("teacher_ready", "the teacher node"))
+        # The evaluator and the automatic teacher must be heard; every node that listens to
+        # the run's records must hear it from its first record (sgim_ros/ready.py).
+        evaluated = self.p["wait_for_evaluation"]
+        expected.publishers = [topic for needed, topic in ((evaluated, "evaluations"),
+                                                           (self.automatic, "demonstrations"))
+                               if needed]
+        wanted = [
+            (self.p["wait_for_recorder"], "recorder_ready",
+             "the recorder node (or set wait_for_recorder to false)"),
+            (evaluated, "evaluator_ready", "the evaluator node"),
+            (self.learner in GOAL_BABBLERS, "explorer_ready", "the low_level_explorer node"),
+            (self.learner in GOAL_BABBLERS, "goal_generator_ready", "the goal_generator node"),
+            (self.social, "imitation_ready", "the imitation node"),
+            (self.automatic, "teacher_ready", "the teacher node"),
+        ]
+        expected.listeners = [(service, who) for needed, service, who in wanted if needed]
         return expected
 
     async def _call(self, client, request, name: str):
@@ -283,15 +279,15 @@ class SocialInteraction(AsyncNode):
                 await self.pace.hold(self.count)
                 if self.pace.turn_due(self.count) and self.count not in self.turns_taken:
                     self.turns_taken.add(self.count)
-                    how = await self.pace.teacher_turn(self.count, lambda: bool(self.pending))
+                    how = await self.pace.teacher_turn(self.count, lambda: bool(self.inbox.pending))
                     self.get_logger().info(f"teacher's turn at movement {self.count}: {how}")
                     continue
             boundary = self.sync_period and self.count % self.sync_period == 0
             if boundary and self.count not in self.turns_taken:
                 self.turns_taken.add(self.count)
-                await self._until(lambda b=self.count: b in self.inbox.boundary_word,
-                                  self.p["teacher_timeout"],
-                                  f"the teacher's word at movement {self.count}")
+                await self.waits.until(lambda b=self.count: b in self.inbox.boundary_word,
+                                       self.p["teacher_timeout"],
+                                       f"the teacher's word at movement {self.count}")
                 word = self.inbox.boundary_word.pop(self.count)
                 if shown(word):
                     await self._take_demonstration(word)
@@ -299,8 +295,8 @@ class SocialInteraction(AsyncNode):
             if self.asks is not None and self.asks.should_ask(self.count):
                 await self._ask_for_help()
                 continue
-            if self.pending:
-                await self._take_demonstration(self.pending.popleft())
+            if self.inbox.pending:
+                await self._take_demonstration(self.inbox.pending.popleft())
                 self._paced()
                 continue
             cap = self._cap()
@@ -330,9 +326,10 @@ class SocialInteraction(AsyncNode):
         ask = self.asks.ask(self.count)
         self.get_logger().info(f"help request {ask.index} at movement {self.count} (goal "
                                f"{[round(x, 3) for x in ask.goal]})")
-        await self._until(lambda i=ask.index: i in self.asks.answers, self.p["teacher_timeout"],
-                          f"the teacher's answer to help request {ask.index} at movement "
-                          f"{self.count}")
+        await self.waits.until(lambda i=ask.index: i in self.asks.answers,
+                               self.p["teacher_timeout"],
+                               f"the teacher's answer to help request {ask.index} at movement "
+                               f"{self.count}")
         word = self.asks.answers.pop(ask.index)
         if shown(word):
             await self._take_demonstration(word)
@@ -414,7 +411,7 @@ class SocialInteraction(AsyncNode):
             movements_before=self.count), "imitate")
 
     async def _action(self, client: ActionClient, goal, name: str):
-        held = self.pending or (self.pace is not None and self.pace.paused)
+        held = self.inbox.pending or (self.pace is not None and self.pace.paused)
         result = await self.job.run(client, goal, name, self.count, self.p["call_timeout"],
                                     cut_at_once=bool(held) and name == "reach_goal")
         self.count += result.movements_used
