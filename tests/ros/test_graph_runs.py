@@ -285,6 +285,8 @@ def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner)
 
 def test_a_demonstration_mid_goal_is_handled_at_the_next_movement_boundary(
         ros_processes, ros_domain, tmp_path, rclpy_context):
+    from rclpy.duration import Duration
+
     from sgim_msgs.msg import Demonstration, Movement
     from sgim_ros import qos
     from sim_bridge.data_files import load_teaching_set
@@ -295,14 +297,18 @@ def test_a_demonstration_mid_goal_is_handled_at_the_next_movement_boundary(
     publisher = client.node.create_publisher(Demonstration, "/demonstrations", qos.RECORDS)
     child = run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--teacher", "external")
     teaching = load_teaching_set()
-    # Wait until a goal attempt is under way (a goal-directed movement past the first ones).
+    # Wait until a goal attempt is under way (a goal-directed movement past the first ones)
+    # and the arbiter and the recorder hear the demonstration (as tests/ros/test_faults.py).
     assert client.spin_until(
-        lambda: len(seen) > 40 and seen[-1].process == Movement.PROCESS_GOAL_DIRECTED,
-        timeout=120)
+        lambda: len(seen) > 40 and seen[-1].process == Movement.PROCESS_GOAL_DIRECTED
+        and publisher.get_subscription_count() >= 2, timeout=120)
     sent_after = seen[-1].index
     publisher.publish(Demonstration(
         index=1, movement_index=sent_after, action=teaching.actions[0].tolist(),
         outcome=teaching.outcomes[0].tolist(), teaching_set_index=0, source="human"))
+    # Closing before every reader acknowledged it could lose it (seen once under load: the
+    # run went on without a demonstration).
+    assert publisher.wait_for_all_acked(Duration(seconds=30))
     client.close()
     run = finish(child, tmp_path, "sgim-d")
 
