@@ -3,7 +3,8 @@
 A SAGG-RIAC learner (default configuration) runs ``--movements`` movements on each analytic
 arm; its final memory is then queried by every inverse model of core/inverse_model.py
 (``nearest``, ``reliable``, ``local-linear``, and the paper's Gaussian interpolation of
-several neighbours' actions for reference), on the arm's VALIDATION goals (the benchmark goals
+several neighbours' actions for reference; and ``local-linear`` without its held-out step
+check, and without its step at all), on the arm's VALIDATION goals (the benchmark goals
 stay untouched by choices), and each chosen action is cast on the noise-free arm, so the
 figure is the inverse model's own error on that memory, free of cast noise.
 
@@ -59,10 +60,16 @@ def one_run(job: tuple[str, int, int]) -> dict:
     errors = {}
     for method in INVERSE_MODELS:
         config = LearnerConfig(inverse_model=method)
-        model = inverse_model_for(learner.memory, config) if method != "nearest" \
+        model = inverse_model_for(learner.memory, config, world.scale) if method != "nearest" \
             else InverseModel(learner.memory, "nearest")
         errors[method] = float(np.mean([np.linalg.norm(arm.forward(model(g)) - g)
                                         for g in goals]))
+    variants = {"unchecked": LearnerConfig(local_step_check="none"),
+                "no-step": LearnerConfig(local_step_fraction=1e-12)}
+    for label, config in variants.items():
+        model = inverse_model_for(learner.memory, config, world.scale)
+        errors[label] = float(np.mean([np.linalg.norm(arm.forward(model(g)) - g)
+                                       for g in goals]))
     errors["interpolation"] = float(np.mean(
         [np.linalg.norm(arm.forward(interpolated(learner.memory, g)) - g) for g in goals]))
     return {"world": name, "seed": seed, "errors": errors, "memory": len(learner.memory)}
@@ -82,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
     jobs = [(w, s, args.movements) for w in args.worlds for s in range(args.seeds)]
     with ProcessPoolExecutor(args.jobs) as pool:
         results = list(pool.map(one_run, jobs))
-    methods = [*INVERSE_MODELS, "interpolation"]
+    methods = [*INVERSE_MODELS, "unchecked", "no-step", "interpolation"]
     print(f"inverse models on the same SAGG-RIAC memories ({args.movements} movements), "
           "validation goals, noise-free casts")
     for name in args.worlds:

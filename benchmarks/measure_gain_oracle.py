@@ -63,7 +63,8 @@ def attempt_gains(learner, goals: np.ndarray, noisy, exact, seed: int,
     for goal in goals:
         memory = copy.deepcopy(learner.memory)
         d_mem, i = memory.nearest(goal, 1)
-        attempt = GoalAttempt(goal, memory, inverse_model_for(memory, config), config,
+        inverse = inverse_model_for(memory, config, learner.scale)
+        attempt = GoalAttempt(goal, memory, inverse, config,
                               learner.scale, rng, memory.action_dim,
                               probe_scale_for(config, learner.scale, memory.action_dim))
         best_action, best = None, float("inf")

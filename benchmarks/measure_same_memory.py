@@ -7,8 +7,9 @@ evaluation world with its own seed (both models in worlds of the same seed, as t
 does), to see how often the 2-cast verdict flips and how large the gap is against its own
 spread. The actions of both models are computed once: only the casts' noise differs between
 repeats. A third model, ours without its local-linear step (the candidate it ranks best,
-that pair's own action), tells the ranking's share of the gap from the step's, and a fourth,
-ours without the gate on the fits it steps along (``local_min_casts`` 0), the gate's share.
+that pair's own action), tells the ranking's share of the gap from the step's, a fourth,
+ours without the gate on the fits it steps along (``local_min_casts`` 0), the gate's share,
+and a fifth, ours without the held-out check of its step (``local_step_check: none``).
 ``--learn-set NAME=VALUE`` changes the learning run's LearnerConfig (e.g. local_min_casts=0 to
 learn the memory the way the learner did before the gate).
 
@@ -54,14 +55,17 @@ def main() -> int:
     learner = make_learner(a.learner, world.env.action_dim, world.env.outcome_dim, a.seed,
                            LearnerConfig(**parse_set(a.learn_set)), world.scale)
     run(learner, world, a.movements, 0, a.seed, lambda record: None)
-    ours = inverse_model_for(learner.memory, LearnerConfig())  # the default inverse model
+    ours = inverse_model_for(learner.memory, LearnerConfig(), world.scale)  # the default model
     # ours without its local-linear step: the candidate it ranks best, that pair's own action
     unmoved = InverseModel(learner.memory, "local-linear", ours.l_max, ours.k_max, ours.alpha,
                            ours.local_radius, ours.local_neighbours, 1e-12)
     ungated = InverseModel(learner.memory, "local-linear", ours.l_max, ours.k_max, ours.alpha,
-                           ours.local_radius, ours.local_neighbours, ours.local_step, 0.0)
+                           ours.local_radius, ours.local_neighbours, ours.local_step, 0.0,
+                           ours.noise_rms)
+    unchecked = inverse_model_for(learner.memory, LearnerConfig(local_step_check="none"),
+                                  world.scale)
     models = {"ours": ours, "nearest": InverseModel(learner.memory, "nearest"),
-              "ours-no-step": unmoved, "ours-no-gate": ungated}
+              "ours-no-step": unmoved, "ours-no-gate": ungated, "ours-unchecked": unchecked}
     actions = {label: {tuple(g): np.asarray(m(g), float) for g in world.goals}
                for label, m in models.items()}
     same = np.mean([np.array_equal(actions["ours"][k], actions["nearest"][k])
@@ -80,21 +84,18 @@ def main() -> int:
             if hasattr(fresh.env, "close"):
                 fresh.env.close()
                 fresh.eval_env.close()
-        rows.append((out["ours"], out["nearest"], out["ours-no-step"], out["ours-no-gate"]))
-        print(f"  repeat {r}: ours {out['ours']:.4f}, nearest {out['nearest']:.4f}, "
-              f"ours - nearest {out['ours'] - out['nearest']:+.4f}; "
-              f"ours without its step {out['ours-no-step']:.4f}, "
-              f"without the gate {out['ours-no-gate']:.4f}")
+        rows.append(out)
+        print(f"  repeat {r}: " + ", ".join(f"{k} {v:.4f}" for k, v in out.items()))
         sys.stdout.flush()
-    o, n, u, g = np.array(rows).T
-    d = o - n
-    print(f"over {a.repeats} repeats of {a.casts} casts per goal: ours {o.mean():.4f}, "
-          f"nearest {n.mean():.4f}; ours - nearest {d.mean():+.4f} (sd {d.std(ddof=1):.4f} "
-          f"per repeat); ours no worse in {int(np.sum(d <= 0))}/{a.repeats} repeats "
-          f"({time.perf_counter() - start:.0f} s)")
-    print(f"ours without its step {u.mean():.4f} (ours - it {np.mean(o - u):+.4f}); "
-          f"ours without the gate {g.mean():.4f} (minus nearest {np.mean(g - n):+.4f}, no worse "
-          f"in {int(np.sum(g <= n))}/{a.repeats} repeats)")
+    print(f"over {a.repeats} repeats of {a.casts} casts per goal "
+          f"({time.perf_counter() - start:.0f} s):")
+    near = np.array([o["nearest"] for o in rows])
+    for label in models:
+        v = np.array([o[label] for o in rows])
+        d = v - near
+        sd = d.std(ddof=1) if len(d) > 1 else 0.0
+        print(f"  {label:15s} {v.mean():.4f}; minus nearest {d.mean():+.4f} (sd {sd:.4f} per "
+              f"repeat), no worse in {int(np.sum(d <= 0))}/{a.repeats} repeats")
     return 0
 
 

@@ -65,6 +65,7 @@ from sgim_nodes.nodes.ros_glue import (
     learner_node_params,
     run_node,
     vec,
+    world_scale,
 )
 from sgim_ros import qos
 from sgim_ros.params import Param, ParameterError, at_least, non_negative, one_of
@@ -131,7 +132,8 @@ class TeacherNode(Node):
         limits = Limits(action_size=ts.actions.shape[1], outcome_size=ts.outcomes.shape[1],
                         budget=p["movements"], teaching_set_size=len(ts.actions))
         self.gate = LiveGate(self.get_logger().error, limits)
-        self.memory = MovementMemory(self, config, p["action_size"], p["outcome_size"], limits)
+        self.memory = MovementMemory(self, config, p["action_size"], p["outcome_size"],
+                                     world_scale(p), limits)
         self.memory.after_store.append(lambda _msg: self._maybe_teach())
         if p["resume_from"]:
             point = resume_point(p["resume_from"], config, p["resume_segments"])

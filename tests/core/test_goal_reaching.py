@@ -25,7 +25,7 @@ def _setup(config, n=1, action_dim=2):
     for _ in range(n):
         a = rng.uniform(-0.2, 0.2, action_dim) if n > 1 else np.zeros(action_dim)
         mem.add(a, np.clip(a[:2], -1, 1))
-    return mem, inverse_model_for(mem, config)
+    return mem, inverse_model_for(mem, config, SCALE)
 
 
 def _attempt(goal, mem, inv, cfg, seed=0, action_dim=2):
@@ -127,7 +127,8 @@ def test_failed_movements_count_against_the_budget():
 def test_empty_memory_explores_with_a_random_action():
     cfg = LearnerConfig()
     mem = Memory(3, 2)
-    att = _attempt(np.zeros(2), mem, inverse_model_for(mem, cfg), cfg, action_dim=3)
+    att = _attempt(np.zeros(2), mem, inverse_model_for(mem, cfg, SCALE), cfg,
+                   action_dim=3)
     a, label = att.next_action()
     assert label == "exploration" and a.shape == (3,)
     att.observe(a, MovementResult(np.array([0.1, 0.0]), Status.OK))

@@ -87,6 +87,51 @@ def test_local_linear_does_not_step_on_a_fit_of_too_few_casts():
     assert just_enough.estimate(np.array([0.7, 0.0])).action[0] == pytest.approx(0.65, abs=1e-6)
 
 
+def _rough_or_smooth(rough: bool) -> Memory:
+    """Pairs around action 0 in 4-D, 2-D outcomes with noise 0.02 per axis: a linear world,
+    or one whose landing changes faster than the neighbourhood (as a cast's can)."""
+    rng = np.random.default_rng(5)
+    mem = Memory(4, 2)
+    for _ in range(200):
+        a = rng.uniform(-0.5, 0.5, 4)
+        y = 0.3 * np.sin(40.0 * a[:2]) if rough else np.array([a[0] + 0.5 * a[1], a[2] - a[3]])
+        mem.add(a, y + rng.normal(0, 0.02, 2))
+    return mem
+
+
+@pytest.mark.parametrize("rough", [False, True])
+def test_the_step_is_taken_only_where_held_out_casts_support_it(rough):
+    """Given the world's noise, the step is taken when the gain it predicts exceeds the fit's
+    held-out error beyond that noise: on the linear world, as without the check; on the rough
+    one the model returns the chosen pair's own action (without the check it would step)."""
+    mem = _rough_or_smooth(rough)
+    kwargs = dict(l_max=5, local_radius=0.8, local_step=0.2)
+    goal = np.array([0.15, -0.1])
+    unchecked = InverseModel(mem, "local-linear", **kwargs).estimate(goal)
+    checked = InverseModel(mem, "local-linear", **kwargs, noise_rms=0.02 * np.sqrt(2)
+                           ).estimate(goal)
+    own = mem.actions[checked.candidate_index]
+    assert not np.allclose(unchecked.action, mem.actions[unchecked.candidate_index])  # steps
+    if rough:
+        assert checked.action == pytest.approx(own)  # not moved
+    else:
+        assert checked.action == pytest.approx(unchecked.action)
+        assert not np.allclose(checked.action, own)
+
+
+def test_the_learners_inverse_model_checks_its_step_against_the_worlds_noise():
+    from sgim_nodes.core.scale import unit_box
+
+    scale = unit_box(2, 0.07)
+    mem = Memory(3, 2)
+    assert inverse_model_for(mem, LearnerConfig(), scale).noise_rms == pytest.approx(
+        0.07 * 2 / np.sqrt(np.pi))
+    unchecked = LearnerConfig(local_step_check="none")
+    assert inverse_model_for(mem, unchecked, scale).noise_rms is None
+    with pytest.raises(ValueError, match="local_step_check"):
+        LearnerConfig(local_step_check="sometimes")
+
+
 def test_empty_memory_gives_none():
     for method in ("nearest", "reliable", "local-linear"):
         assert InverseModel(Memory(1, 2), method).estimate(np.zeros(2)) is None
@@ -106,7 +151,7 @@ def test_never_worse_than_the_nearest_neighbour_on_the_same_memory(world):
         for _ in range(1200):
             a, _ = learner.next_action()
             learner.observe(a, noisy.execute(a))
-        ours = inverse_model_for(learner.memory, config)
+        ours = inverse_model_for(learner.memory, config, noisy.scale)
         nearest = InverseModel(learner.memory, "nearest")
 
         def error(model):

@@ -57,3 +57,56 @@ def test_step_stays_within_its_radius_and_the_box():
     fit = local_model.fit(mem, centre, radius=0.5, max_pairs=60)
     action, _ = local_model.step(fit, np.array([5.0, 5.0]), radius=0.1)
     assert np.linalg.norm(action - centre) <= 0.1 + 1e-12 and np.all(np.abs(action) <= 1.0)
+
+
+def _reference_loo(memory, centre, radius, max_pairs):
+    """Leave-one-out by refitting: each pair dropped in turn, the others refitted with the same
+    weights and ridge, the dropped pair predicted."""
+    dist, idx = memory.nearest_actions(centre, max_pairs)
+    keep = dist <= radius
+    dist, idx = dist[keep], idx[keep]
+    x, y = memory.actions[idx] - centre, memory.outcomes[idx]
+    w = np.exp(-0.5 * (dist / (0.5 * radius)) ** 2)
+    lam = local_model.RIDGE * float((w[:, None] * x**2).sum() / w.sum())
+    design = np.hstack([np.ones((len(idx), 1)), x])
+    errors = []
+    for i in range(len(idx)):
+        rest = np.arange(len(idx)) != i
+        a = design[rest] * w[rest, None]
+        gram = design[rest].T @ a + np.diag(np.r_[0.0, np.full(x.shape[1], lam)])
+        beta = np.linalg.solve(gram, a.T @ y[rest])
+        errors.append(y[i] - design[i] @ beta)
+    errors = np.array(errors)
+    return float(np.sqrt((w * (errors**2).sum(1)).sum() / w.sum()))
+
+
+def test_held_out_error_is_the_leave_one_out_error_of_refits():
+    rng = np.random.default_rng(3)
+    mem = Memory(3, 2)
+    for _ in range(15):
+        a = rng.uniform(-0.3, 0.3, 3)
+        mem.add(a, np.array([a[0] + a[1] ** 2, a[2] - a[0]]) + rng.normal(0, 0.02, 2))
+    centre = mem.actions[0]
+    fit = local_model.fit(mem, centre, radius=0.6, max_pairs=60)
+    assert fit.held_out == pytest.approx(_reference_loo(mem, centre, 0.6, 60), rel=1e-9)
+    assert fit.held_out > fit.residual  # a held-out cast is harder to predict than a seen one
+
+
+def test_misfit_is_what_the_model_gets_wrong_beyond_the_worlds_noise():
+    """A linear world with noise: the held-out error is about the noise, the misfit small. A
+    world that changes faster than the neighbourhood (a chaotic one, as a cast's landing can
+    be): the misfit is far larger than the noise."""
+    rng = np.random.default_rng(4)
+    sigma = 0.02
+    noise_rms = sigma * np.sqrt(2.0)
+    smooth, rough = Memory(4, 2), Memory(4, 2)
+    for _ in range(200):
+        a = rng.uniform(-0.5, 0.5, 4)
+        smooth.add(a, np.array([a[0] + 0.5 * a[1], a[2] - a[3]]) + rng.normal(0, sigma, 2))
+        rough.add(a, 0.3 * np.sin(40.0 * a[:2]) + rng.normal(0, sigma, 2))
+    centre = np.zeros(4)
+    smooth_fit = local_model.fit(smooth, centre, radius=0.8, max_pairs=60)
+    rough_fit = local_model.fit(rough, centre, radius=0.8, max_pairs=60)
+    assert smooth_fit.misfit(noise_rms) < 0.5 * noise_rms
+    assert rough_fit.misfit(noise_rms) > 5.0 * noise_rms
+    assert smooth_fit.misfit(10.0) == 0.0  # never negative

@@ -39,13 +39,14 @@ def test_the_latest_pair_is_replaced_removed_or_added(n):
 def test_a_live_memory_keeps_the_re_execution_and_refuses_rogue_records(rclpy_context):
     from sgim_msgs.msg import Movement
     from sgim_nodes.core.config import LearnerConfig
+    from sgim_nodes.core.scale import unit_box
     from sgim_nodes.nodes.movement_memory import MovementMemory
     from sgim_ros import qos
     from tests.ros.graph_client import GraphClient
 
     client = GraphClient(rclpy_context, "memory_test")
     try:
-        memory = MovementMemory(client.node, LearnerConfig(), 24, 2)
+        memory = MovementMemory(client.node, LearnerConfig(), 24, 2, unit_box(2, 0.07))
         pub = client.node.create_publisher(Movement, "/movements", qos.RECORDS)
         assert client.spin_until(lambda: pub.get_subscription_count() > 0)
 

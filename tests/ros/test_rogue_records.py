@@ -169,6 +169,7 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
     from sgim_nodes.core.config import LearnerConfig
     from sgim_nodes.core.evaluator import EVALUATION_SEED_OFFSET, Evaluator
     from sgim_nodes.core.learners import inverse_model_for, inverse_or_centre
+    from sgim_nodes.core.runner import fishing_scale
     from sim_bridge.data_files import load_benchmark_goals
     from sim_bridge.fishing_world import FishingWorld
 
@@ -178,7 +179,7 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
         evaluator = Evaluator(world, load_benchmark_goals())
         for recorded in run.evaluations:
             state = rebuild_from_records(records_until(run, recorded.movement_index), config)
-            model = inverse_model_for(state.memory, config)
+            model = inverse_model_for(state.memory, config, fishing_scale())
             result = evaluator.evaluate(lambda g, m=model: inverse_or_centre(m, g, 24))
             assert result.mean_distance == pytest.approx(recorded.mean_distance, abs=1e-12)
     finally:

@@ -22,6 +22,7 @@ from .region_tree import SPLIT_QUALITIES
 from .scale import WorldScale
 
 INVERSE_MODELS = ("nearest", "reliable", "local-linear")
+STEP_CHECKS = ("held-out", "none")
 OPTIMISERS = ("subspace", "local-linear", "nelder-mead", "random-search")
 
 
@@ -127,6 +128,13 @@ class LearnerConfig:
     casts is fitted to their noise: on a sparse fishing memory such steps made the inverse
     model worse than the nearest neighbour (docs/learners.md, section 1). 10 keeps the whole
     benefit of the step on the arms' validation goals (25 lost part of it). Chosen."""
+    local_step_check: str = "held-out"
+    """``held-out``: the local-linear inverse takes its step only when the gain it predicts
+    exceeds the fit's leave-one-out error beyond the world's noise (inverse_model.py); a
+    model-selection test by cross-validation, as in locally weighted learning (Atkeson, Moore
+    and Schaal 1997). ``none``: whenever the fit is large enough. Chosen by measurement
+    (docs/learners.md, section 1): as good as ``none`` on the arms' validation goals, and on
+    the fishing memories where the step had lost to the nearest neighbour it stays out."""
 
     # --- goal reaching ---
     explore_gain: float = 4.0
@@ -225,6 +233,8 @@ class LearnerConfig:
             fail("imitation_count", "must be >= 0")
         if self.inverse_model not in INVERSE_MODELS:
             fail("inverse_model", f"must be one of {', '.join(INVERSE_MODELS)}")
+        if self.local_step_check not in STEP_CHECKS:
+            fail("local_step_check", f"must be one of {', '.join(STEP_CHECKS)}")
         if self.competence_reference not in ("memory", "fixed"):
             fail("competence_reference", "must be memory or fixed")
         if self.region_split not in SPLIT_QUALITIES:

@@ -19,7 +19,12 @@ linear model fitted in that action's own neighbourhood:
   ``local_step`` (a quarter of the fitted radius by default: measured, docs/learners.md),
   and only when the fit averages at least ``min_casts`` casts: a fit on a handful of casts
   in 24 dimensions follows their noise, and its step lost to the nearest neighbour on sparse
-  fishing memories.
+  fishing memories; and, given the world's noise (``noise_rms``), only when the gain the step
+  predicts (how much closer to the goal than the unmoved action) exceeds the fit's misfit,
+  its held-out error beyond that noise: a predicted gain smaller than what the model gets
+  wrong on casts it did not see is no evidence. On the fishing world's non-smooth actions the
+  step then stays out where it lost (docs/learners.md, section 1); on the smooth arms, where
+  the fit predicts to within the noise, it is kept.
 
 docs/learners.md compares the three on the same memories (benchmarks/bench_inverse.py).
 """
@@ -61,7 +66,7 @@ class InverseModel:
     def __init__(self, memory: Memory, method: str = "reliable", l_max: int = 10,
                  k_max: int = 5, alpha: float = 0.5, local_radius: float = 1.0,
                  local_neighbours: int = 60, local_step: float = 0.25,
-                 min_casts: float = 0.0) -> None:
+                 min_casts: float = 0.0, noise_rms: float | None = None) -> None:
         if method not in ("nearest", "reliable", "local-linear"):
             raise ValueError(f"unknown inverse model {method!r}")
         self.memory = memory
@@ -73,6 +78,7 @@ class InverseModel:
         self.local_neighbours = local_neighbours
         self.local_step = local_step
         self.min_casts = min_casts
+        self.noise_rms = noise_rms
 
     def most_reliable(self, goal: np.ndarray) -> tuple[int, float]:
         """Memory index and score of the most reliable of the l_max candidates."""
@@ -102,9 +108,18 @@ class InverseModel:
             if fit is not None and fit.n_effective >= self.min_casts:
                 action, predicted = local_model.step(fit, goal, self.local_step)
                 # A flat or undetermined fit predicts (almost) no change: then stay put.
-                if np.linalg.norm(predicted - fit.outcome) > 0.05 * score:
+                if (np.linalg.norm(predicted - fit.outcome) > 0.05 * score
+                        and self._step_is_evidenced(fit, goal, predicted)):
                     return InverseEstimate(action, index, score, predicted)
         return InverseEstimate(mem.actions[index].copy(), index, score, outcome)
+
+    def _step_is_evidenced(self, fit: local_model.LocalFit, goal: np.ndarray,
+                           predicted: np.ndarray) -> bool:
+        """Does the step's predicted gain exceed what the fit gets wrong beyond noise?"""
+        if self.noise_rms is None:
+            return True
+        gain = float(np.linalg.norm(fit.outcome - goal) - np.linalg.norm(predicted - goal))
+        return gain > fit.misfit(self.noise_rms)
 
     def best_predicted(self, goal: np.ndarray
                        ) -> tuple[int, float, np.ndarray, local_model.LocalFit | None]:

@@ -46,22 +46,25 @@ GOAL_BABBLERS = ("sgim-d", "saggriac", "random-goals")
 UNIFORM_GOALS = (0.0, 1.0, 0.0)  # random-goals: mode 2 only
 
 
-def build_memory(config: LearnerConfig, action_dim: int,
-                 outcome_dim: int) -> tuple[Memory, InverseModel]:
+def build_memory(config: LearnerConfig, action_dim: int, outcome_dim: int,
+                 scale: WorldScale) -> tuple[Memory, InverseModel]:
     """The (action, outcome) memory and the inverse model over it, as every learner has them
     (the graph's explorer and evaluator build theirs with this too)."""
     c = config
     memory = Memory(action_dim, outcome_dim, c.memory_rebuild_fraction, c.memory_min_tail,
                     c.memory_max_tail)
-    return memory, inverse_model_for(memory, config)
+    return memory, inverse_model_for(memory, config, scale)
 
 
-def inverse_model_for(memory: Memory, config: LearnerConfig) -> InverseModel:
+def inverse_model_for(memory: Memory, config: LearnerConfig, scale: WorldScale) -> InverseModel:
+    """The configured inverse model over ``memory``; the world's scale gives it the noise
+    its step check compares with."""
     c = config
     radius = c.local_radius_action * float(np.sqrt(memory.action_dim))
+    noise = scale.noise_rms if c.local_step_check == "held-out" else None
     return InverseModel(memory, c.inverse_model, c.l_max, c.k_max, c.alpha, radius,
                         c.local_neighbours, c.local_step_fraction * radius,
-                        c.local_min_casts)
+                        c.local_min_casts, noise)
 
 
 def region_tree_for(config: LearnerConfig, scale: WorldScale) -> RegionTree:
@@ -102,7 +105,8 @@ class Learner:
         self.action_dim = action_dim
         self.outcome_dim = outcome_dim
         self.rngs = RandomStreams.from_seed(seed)
-        self.memory, self.inverse_model = build_memory(self.config, action_dim, outcome_dim)
+        self.memory, self.inverse_model = build_memory(self.config, action_dim, outcome_dim,
+                                                       scale)
         self.n_movements = 0
         self.n_failures = 0
 

@@ -36,6 +36,12 @@ class LocalFit:
     jacobian: np.ndarray  # J, (outcome_dim, action_dim)
     n_effective: float  # (sum w)^2 / sum w^2: how many casts the estimate averages
     residual: float  # weighted rms residual (noise plus curvature), in outcome units
+    held_out: float = float("nan")  # weighted rms leave-one-out error, in outcome units
+
+    def misfit(self, noise_rms: float) -> float:
+        """The held-out error beyond the world's noise (rms distance of one cast from its
+        mean): what the model itself gets wrong, 0 when it predicts as well as noise allows."""
+        return float(np.sqrt(max(self.held_out**2 - noise_rms**2, 0.0)))
 
 
 def fit(memory: Memory, centre: np.ndarray, radius: float, max_pairs: int) -> LocalFit | None:
@@ -61,7 +67,12 @@ def fit(memory: Memory, centre: np.ndarray, radius: float, max_pairs: int) -> Lo
     b, jac = beta[0], beta[1:].T
     resid = y - (b + x @ jac.T)
     rms = float(np.sqrt((w * (resid**2).sum(1)).sum() / w.sum()))
-    return LocalFit(centre, b, jac, float(w.sum() ** 2 / (w**2).sum()), rms)
+    # Leave-one-out residuals without refitting; the ridge rows are a prior, never left out.
+    gram = design.T @ design + np.diag(np.r_[0.0, np.full(n_act, lam)])
+    hat = np.einsum("ij,ji->i", design, np.linalg.solve(gram, design.T))
+    loo = resid / np.maximum(1.0 - hat, 1e-9)[:, None]
+    held_out = float(np.sqrt((w * (loo**2).sum(1)).sum() / w.sum()))
+    return LocalFit(centre, b, jac, float(w.sum() ** 2 / (w**2).sum()), rms, held_out)
 
 
 def step(model: LocalFit, goal: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:

@@ -52,6 +52,15 @@ class WorldScale:
                                                               np.ravel(high)), float(noise))
 
     @property
+    def noise_rms(self) -> float:
+        """The root-mean-square distance of one execution's outcome from the mean, for
+        isotropic Gaussian noise of the declared mean distance (2-D: 2 / sqrt(pi) times it):
+        the noise part of a model's squared prediction error."""
+        d = self.dim
+        mean_over_sigma = math.sqrt(2.0) * math.exp(math.lgamma((d + 1) / 2) - math.lgamma(d / 2))
+        return float(self.noise * math.sqrt(d) / mean_over_sigma)
+
+    @property
     def dim(self) -> int:
         return len(self.low)
 

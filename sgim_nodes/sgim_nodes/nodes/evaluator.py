@@ -65,7 +65,8 @@ class EvaluatorNode(Node):
         self.world = FishingWorld(seed=values["seed"] + EVALUATION_SEED_OFFSET,
                                   noise=values["noise"])
         self.evaluator = Evaluator(self.world, goals, world_scale(values).diagonal)
-        self.memory = MovementMemory(self, config, self.action_size, values["outcome_size"])
+        self.memory = MovementMemory(self, config, self.action_size, values["outcome_size"],
+                                     world_scale(values))
         self.memory.before_store.append(self._before_movement)
         self.memory.after_store.append(self._after_movement)
         self.final: int | None = values["movements"] or None
@@ -111,7 +112,8 @@ class EvaluatorNode(Node):
             k = self.missed.pop(0)
             state = rebuild_from_records(records_until(self._point.records, k), self._config)
             self.done.discard(k)
-            self._evaluate(k, inverse_model_for(state.memory, self._config))
+            self._evaluate(k, inverse_model_for(state.memory, self._config,
+                                                    self.memory.scale))
         if self.final is None and msg.movement_index == msg.total_movements:
             self.final = msg.total_movements
         if self.final is not None and self.memory.count >= self.final:

@@ -57,7 +57,8 @@ class LowLevelExplorer(AsyncNode):
         self.scale = world_scale(values)
         self.distances = self.config.distances(self.scale)
         self.probe_scale = probe_scale_for(self.config, self.scale, self.action_size)
-        self.memory = MovementMemory(self, self.config, self.action_size, self.outcome_size)
+        self.memory = MovementMemory(self, self.config, self.action_size, self.outcome_size,
+                                     self.scale)
         if values["resume_from"]:
             self.memory.resume(resume_point(values["resume_from"], self.config,
                                  values["resume_segments"]))

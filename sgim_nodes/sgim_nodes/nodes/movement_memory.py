@@ -23,6 +23,7 @@ from sgim_nodes.bag.validation import Limits, LiveGate
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.learners import DEMONSTRATION, build_memory
 from sgim_nodes.core.memory import Memory
+from sgim_nodes.core.scale import WorldScale
 from sgim_nodes.nodes.ros_glue import PROCESS_LABELS, check_vector, vec
 from sgim_ros import qos
 
@@ -31,11 +32,12 @@ class MovementMemory:
     """Subscribes `movements` on `node`; holds the Memory and InverseModel of the learner."""
 
     def __init__(self, node: Node, config: LearnerConfig, action_size: int,
-                 outcome_size: int, limits: Limits | None = None) -> None:
+                 outcome_size: int, scale: WorldScale, limits: Limits | None = None) -> None:
         self.node = node
-        self.config = config
+        self.config, self.scale = config, scale
         self.action_size, self.outcome_size = action_size, outcome_size
-        self.memory, self.inverse_model = build_memory(config, action_size, outcome_size)
+        self.memory, self.inverse_model = build_memory(config, action_size, outcome_size,
+                                                       scale)
         self.count = 0  # the run's count: the latest valid learner movement
         self.before_store: list = []  # called with each learner Movement before it is stored
         self.after_store: list = []  # ... and after (then memory holds it)
