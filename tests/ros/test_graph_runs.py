@@ -145,7 +145,9 @@ def test_means_only_demonstrations_through_the_graph(ros_processes, ros_domain, 
     from sgim_nodes.bag.rebuild import rebuild_from_records
     from sim_bridge.data_files import load_teaching_set
 
-    run, _ = social_mode_run(ros_processes, ros_domain, tmp_path, "means",
+    # Seed 4: its learner leaves 4 teaching goals unreached at the teacher's turns (seed 2's
+    # only 2 since the inverse model's held-out step check), so imitations are seen 4 times.
+    run, _ = social_mode_run(ros_processes, ros_domain, tmp_path, "means", seed=4,
                              demonstration_content="means-only")
     teaching = load_teaching_set()
     demos = [d for d in run.demonstrations if d.shown]
