@@ -36,3 +36,18 @@ def test_node_parameter_files_hold_the_code_defaults():
     assert values["noise"] == DEFAULT_NOISE and values["time_step"] == DEFAULT_TIME_STEP
     teacher = yaml.safe_load((REPO / "teacher" / "config" / "teacher.yaml").read_text())
     assert teacher["teacher"]["ros__parameters"]["demonstration_period"] == PAPER_PERIOD
+
+
+def test_a_run_recorded_before_a_field_existed_resumes_as_it_ran():
+    """recorded_learner: a recording without local_step_check (made before it existed) gets
+    the value that does what the learner did then; a complete recording gets nothing."""
+    from sgim_nodes.core.config import BEFORE_IT_EXISTED, LearnerConfig, recorded_learner
+
+    complete = LearnerConfig().to_dict()
+    assert recorded_learner(complete) == ({}, [])
+    older = {k: v for k, v in complete.items() if k not in ("local_step_check", "zeta")}
+    earlier, unknown = recorded_learner(older)
+    assert earlier == {"local_step_check": "none"} and unknown == ["zeta"]
+    assert LearnerConfig(**{**older, **earlier}).local_step_check == "none"
+    for name, value in BEFORE_IT_EXISTED.items():  # every such value is a valid setting
+        LearnerConfig(**{name: value})

@@ -262,3 +262,17 @@ class LearnerConfig:
     @classmethod
     def field_names(cls) -> list[str]:
         return [f.name for f in fields(cls)]
+
+
+BEFORE_IT_EXISTED: dict[str, Any] = {"local_step_check": "none"}
+"""For a field added after runs were recorded: the value that does what the learner did before
+the field existed. A run recorded then, resumed today, goes on as it ran (recorded_learner)."""
+
+
+def recorded_learner(recorded: dict[str, Any]) -> tuple[dict[str, Any], list[str]]:
+    """What a run's recorded parameters (every LearnerConfig field, as run_experiment writes
+    them) leave out: the fields whose earlier behaviour BEFORE_IT_EXISTED knows, with those
+    values, and the names of the others (they take today's defaults)."""
+    absent = [name for name in LearnerConfig.field_names() if name not in recorded]
+    known = {name: BEFORE_IT_EXISTED[name] for name in absent if name in BEFORE_IT_EXISTED}
+    return known, [name for name in absent if name not in known]

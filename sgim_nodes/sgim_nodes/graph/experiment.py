@@ -39,6 +39,7 @@ from typing import Any
 
 import yaml
 
+from sgim_nodes.core.config import recorded_learner
 from sgim_nodes.core.learners import LEARNER_NAMES
 from sgim_nodes.graph import supervise
 from sgim_nodes.graph.description import (
@@ -328,8 +329,16 @@ def plan_resume(args: argparse.Namespace) -> Plan | None:
                 f"{str(meta.get('outcome', 'unknown')).split(':')[0]}): "
                 f"movements {first}..{last} were lost. The resumed run carries on from "
                 f"movement {state.recorded}, where the recordings end, so they are made again")
+        earlier, unknown = recorded_learner(values.shared)
+        if earlier or unknown:
+            kept = ", ".join(f"{k}={v}" for k, v in earlier.items())
+            parts = [f"keeps what the learner did then ({kept})"] if earlier else []
+            parts += [f"takes today's defaults for {', '.join(unknown)}"] if unknown else []
+            names = ", ".join(sorted([*earlier, *unknown]))
+            say(f"note: {run_dir} was recorded before {names} existed; the resumed run "
+                f"{' and '.join(parts)}")
         segment = next_segment(run_dir)
-        shared = dict(values.shared, resume_from=str(run_dir),
+        shared = dict(values.shared, **earlier, resume_from=str(run_dir),
                       resume_segments=len(segments(run_dir)), output=str(segment))
         values = RunParameters(check(shared), values.per_node)
         entry = {"segment": segment.name, "at": datetime.now(UTC).isoformat(),

@@ -15,7 +15,7 @@ from rclpy.node import Node
 
 from sgim_msgs.msg import Region, RegionMap
 from sgim_nodes.bag.validation import vector_problem
-from sgim_nodes.core.config import INVERSE_MODELS, OPTIMISERS, LearnerConfig
+from sgim_nodes.core.config import INVERSE_MODELS, OPTIMISERS, STEP_CHECKS, LearnerConfig
 from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS  # noqa: F401 - for nodes
 from sgim_nodes.core.learners import LEARNER_NAMES
 from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
@@ -126,6 +126,7 @@ LEARNER_BOUNDS = {
                      "success_tolerance_noise", "interest_noise_correction",
                      "imitation_count", "local_min_casts"), at_least(0)),
     "inverse_model": one_of(*INVERSE_MODELS),
+    "local_step_check": one_of(*STEP_CHECKS),
     "optimiser": one_of(*OPTIMISERS),
     "competence_reference": one_of("memory", "fixed"),
     "region_split": one_of(*SPLIT_QUALITIES),
