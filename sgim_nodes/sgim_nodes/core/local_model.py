@@ -16,7 +16,8 @@ the true Jacobian was 0.1 on the 20-joint arm); the ridge keeps it small off tho
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -36,7 +37,22 @@ class LocalFit:
     jacobian: np.ndarray  # J, (outcome_dim, action_dim)
     n_effective: float  # (sum w)^2 / sum w^2: how many casts the estimate averages
     residual: float  # weighted rms residual (noise plus curvature), in outcome units
-    held_out: float = float("nan")  # weighted rms leave-one-out error, in outcome units
+    # What the held-out error is computed from, only when asked (most fits never are):
+    design: np.ndarray | None = field(repr=False, compare=False, default=None)  # sqrt(w)[1, x]
+    ridge: float = field(repr=False, compare=False, default=0.0)
+    residuals: np.ndarray | None = field(repr=False, compare=False, default=None)
+    weights: np.ndarray | None = field(repr=False, compare=False, default=None)
+
+    @cached_property
+    def held_out(self) -> float:
+        """Weighted rms leave-one-out error, in outcome units: residuals e_i / (1 - h_ii), h
+        the weighted hat matrix, without refitting; the ridge rows are a prior, never left
+        out."""
+        d, w = self.design, self.weights
+        gram = d.T @ d + np.diag(np.r_[0.0, np.full(d.shape[1] - 1, self.ridge)])
+        hat = np.einsum("ij,ji->i", d, np.linalg.solve(gram, d.T))
+        loo = self.residuals / np.maximum(1.0 - hat, 1e-9)[:, None]
+        return float(np.sqrt((w * (loo**2).sum(1)).sum() / w.sum()))
 
     def misfit(self, noise_rms: float) -> float:
         """The held-out error beyond the world's noise (rms distance of one cast from its
@@ -67,12 +83,8 @@ def fit(memory: Memory, centre: np.ndarray, radius: float, max_pairs: int) -> Lo
     b, jac = beta[0], beta[1:].T
     resid = y - (b + x @ jac.T)
     rms = float(np.sqrt((w * (resid**2).sum(1)).sum() / w.sum()))
-    # Leave-one-out residuals without refitting; the ridge rows are a prior, never left out.
-    gram = design.T @ design + np.diag(np.r_[0.0, np.full(n_act, lam)])
-    hat = np.einsum("ij,ji->i", design, np.linalg.solve(gram, design.T))
-    loo = resid / np.maximum(1.0 - hat, 1e-9)[:, None]
-    held_out = float(np.sqrt((w * (loo**2).sum(1)).sum() / w.sum()))
-    return LocalFit(centre, b, jac, float(w.sum() ** 2 / (w**2).sum()), rms, held_out)
+    return LocalFit(centre, b, jac, float(w.sum() ** 2 / (w**2).sum()), rms, design, lam,
+                    resid, w)
 
 
 def step(model: LocalFit, goal: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
