@@ -6,6 +6,9 @@ move the landing point a little, and the time step does not decide where it land
 is in normalised outcome units.
 
     PYTHONPATH=sim_bridge .venv/bin/python benchmarks/measure_world.py --casts 5000
+
+``--solver dantzig`` measures the same figures with the constraint solver that issue 11's
+speed target would need (bench_sim_speed.py), before any data file is made with it.
 """
 
 from __future__ import annotations
@@ -25,6 +28,19 @@ from sim_bridge.data_files import (
 from sim_bridge.fishing_world import FishingWorld, Status
 from sim_bridge.lake import draw_shoreline
 from sim_bridge.scaling import world_to_outcome
+
+SOLVER = "shipped"
+"""The constraint solver of every world built here (--solver)."""
+
+
+def build(**kwargs) -> FishingWorld:
+    """A FishingWorld with the solver --solver names."""
+    world = FishingWorld(**kwargs)
+    if SOLVER != "shipped":
+        from bench_sim_speed import set_solver
+
+        set_solver(world, SOLVER)
+    return world
 
 
 def ok_outcomes(world: FishingWorld, actions: np.ndarray) -> np.ndarray:
@@ -54,7 +70,7 @@ def touch_downs(world: FishingWorld, actions: np.ndarray) -> np.ndarray:
 def sensitivity(n_actions: int, delta: float, seed: int) -> np.ndarray:
     """Landing shift when one action number changes by ``delta`` (noise-free), all 24 numbers."""
     rng = np.random.default_rng(seed)
-    world = FishingWorld(seed=seed, noise=0.0)
+    world = build(seed=seed, noise=0.0)
     shifts = []
     for a in rng.uniform(-1, 1, (n_actions, world.action_dim)):
         base = touch_downs(world, a[None])[0]
@@ -72,8 +88,8 @@ def sensitivity(n_actions: int, delta: float, seed: int) -> np.ndarray:
 def dt_halving(n_actions: int, seed: int, dt: float = 1 / 240) -> np.ndarray:
     """Landing shift between time step ``dt`` and ``dt / 2`` (noise-free)."""
     acts = np.random.default_rng(seed).uniform(-1, 1, (n_actions, 24))
-    a = touch_downs(FishingWorld(seed=seed, noise=0.0, time_step=dt), acts)
-    b = touch_downs(FishingWorld(seed=seed, noise=0.0, time_step=dt / 2), acts)
+    a = touch_downs(build(seed=seed, noise=0.0, time_step=dt), acts)
+    b = touch_downs(build(seed=seed, noise=0.0, time_step=dt / 2), acts)
     s = np.linalg.norm(a - b, axis=1)
     return s[np.isfinite(s)]
 
@@ -87,7 +103,7 @@ def paper_noise(n_actions: int = 20, repeats: int = 10, seed: int = 0,
     land (``world_point`` in normalised units); casts that never come down are skipped.
     """
     rng = np.random.default_rng(seed + 1)
-    world = FishingWorld(seed=seed) if noise is None else FishingWorld(seed=seed, noise=noise)
+    world = build(seed=seed) if noise is None else build(seed=seed, noise=noise)
     spreads = []
     for a in rng.uniform(-1, 1, (n_actions, world.action_dim)):
         pts = [world_to_outcome(r.world_point) for r in (world.execute(a) for _ in range(repeats))
@@ -133,7 +149,11 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--reachable", default=None,
                         help="reachable map .npz (default: sim_bridge/data/reachable_map.npz)")
     parser.add_argument("--png", default="docs/figures/sim_random_casts.png")
+    parser.add_argument("--solver", choices=("shipped", "dantzig"), default="shipped",
+                        help="constraint solver of the worlds measured (bench_sim_speed.py)")
     args = parser.parse_args(argv)
+    global SOLVER
+    SOLVER = args.solver
     t0 = time.perf_counter()
     s = sensitivity(args.sens_actions, 1e-3, args.seed)
     print(f"sensitivity (1e-3 on one action number, {len(s)} pairs): median {np.median(s):.4f}, "
@@ -145,7 +165,7 @@ def main(argv: list[str] | None = None) -> None:
     print(f"noise, paper protocol (20 actions x 10 attempts, touch-downs on water or land), "
           f"seeds {args.seed}..{args.seed + args.noise_seeds - 1}: "
           f"{[round(v, 4) for v in noises]}, mean {np.mean(noises):.4f}")
-    world = FishingWorld(seed=args.seed)
+    world = build(seed=args.seed)
     acts = np.random.default_rng(args.seed + 7).uniform(-1, 1, (args.casts, 24))
     out = np.full((args.casts, 2), np.nan)
     status, on_land = np.zeros(args.casts, int), np.zeros(args.casts, bool)
