@@ -109,16 +109,17 @@ class InverseModel:
                 action, predicted = local_model.step(fit, goal, self.local_step)
                 # A flat or undetermined fit predicts (almost) no change: then stay put.
                 if (np.linalg.norm(predicted - fit.outcome) > 0.05 * score
-                        and self._step_is_evidenced(fit, goal, predicted)):
+                        and self._step_is_evidenced(fit, score, goal, predicted)):
                     return InverseEstimate(action, index, score, predicted)
         return InverseEstimate(mem.actions[index].copy(), index, score, outcome)
 
-    def _step_is_evidenced(self, fit: local_model.LocalFit, goal: np.ndarray,
-                           predicted: np.ndarray) -> bool:
-        """Does the step's predicted gain exceed what the fit gets wrong beyond noise?"""
+    def _step_is_evidenced(self, fit: local_model.LocalFit, unmoved_distance: float,
+                           goal: np.ndarray, predicted: np.ndarray) -> bool:
+        """Does the step's predicted gain exceed what the fit gets wrong beyond noise?
+        ``unmoved_distance``: the fit's prediction at its centre to the goal (the rank score)."""
         if self.noise_rms is None:
             return True
-        gain = float(np.linalg.norm(fit.outcome - goal) - np.linalg.norm(predicted - goal))
+        gain = unmoved_distance - float(np.linalg.norm(predicted - goal))
         return gain > fit.misfit(self.noise_rms)
 
     def best_predicted(self, goal: np.ndarray

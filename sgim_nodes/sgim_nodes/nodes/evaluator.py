@@ -64,9 +64,10 @@ class EvaluatorNode(Node):
         goals = load_benchmark_goals()
         self.world = FishingWorld(seed=values["seed"] + EVALUATION_SEED_OFFSET,
                                   noise=values["noise"])
-        self.evaluator = Evaluator(self.world, goals, world_scale(values).diagonal)
+        scale = world_scale(values)
+        self.evaluator = Evaluator(self.world, goals, scale.diagonal)
         self.memory = MovementMemory(self, config, self.action_size, values["outcome_size"],
-                                     world_scale(values))
+                                     scale)
         self.memory.before_store.append(self._before_movement)
         self.memory.after_store.append(self._after_movement)
         self.final: int | None = values["movements"] or None
