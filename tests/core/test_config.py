@@ -30,7 +30,7 @@ def test_defaults_are_valid_and_frozen():
         ("explore_cap", {"explore_cap": 1.5}),
         ("imitation_epsilon", {"imitation_epsilon": 0.0}),
         ("goal_budget", {"goal_budget": 0}),
-        ("min_goals_per_child", {"min_goals_per_child": 40}),
+        ("min_goals_per_child", {"min_goals_per_child": 60}),
         ("inverse_model", {"inverse_model": "average"}),
         ("optimiser", {"optimiser": "bfgs"}),
         ("reach_threshold_noise", {"reach_threshold_noise": 0.0}),

@@ -83,14 +83,19 @@ def test_the_runner_teaches_only_when_asked_for_the_goal_asked_about():
     demos = [r for r in records if r["type"] == "demonstration"]
     assert 0 < len(asks) <= budget_for(movements, period)
     assert all(a["ask"] <= a["movement"] // period + 1 for a in asks)  # never ahead of P
-    # One demonstration per ask (every goal stays unreached), at the ask's movement, and for
-    # the teaching entry nearest the goal asked about.
+    # One demonstration per ask (some teaching goal always stays unreached), at the ask's
+    # movement, and for the unreached teaching entry nearest the goal asked about. At this
+    # tolerance the learner reaches an entry only by reproducing its demonstration, so every
+    # entry nearer to the asked goal than the one shown must have been shown before.
     assert [d["movement"] for d in demos] == [a["movement"] for a in asks]
     goals = world.teaching_outcomes
+    shown_before: set[int] = set()
     for ask, demo in zip(asks, demos, strict=True):
-        nearest = np.linalg.norm(goals - np.asarray(ask["goal"]), axis=1)
-        assert nearest[demo["teaching_index"]] == nearest.min()
+        distance = np.linalg.norm(goals - np.asarray(ask["goal"]), axis=1)
+        nearer = set(np.flatnonzero(distance < distance[demo["teaching_index"]]).tolist())
+        assert nearer <= shown_before, (ask["movement"], nearer - shown_before)
         assert demo["asked_goal"] == ask["goal"]
+        shown_before.add(demo["teaching_index"])
     # Not the periodic turns: the asks fall where the learner stalled, not every P movements.
     assert [a["movement"] for a in asks] != list(range(0, movements, period))[:len(asks)]
 
