@@ -46,7 +46,7 @@ def test_explorer_refuses_bad_demonstrations_and_goals(ros_processes, client):
 
     reach = ActionClient(client.node, ReachGoal, "/reach_goal")
     assert reach.wait_for_server(timeout_sec=30)
-    sent = reach.send_goal_async(ReachGoal.Goal(goal=[1.5, 0.0], goal_index=1))
+    sent = reach.send_goal_async(ReachGoal.Goal(demonstrated=[1.5, 0.0], max_movements=5))
     assert client.spin_until(sent.done)
     result = sent.result().get_result_async()
     assert client.spin_until(result.done)
@@ -117,4 +117,4 @@ def test_a_job_that_does_not_start_at_the_runs_count_is_refused(ros_processes, c
         action=[0.1] * 24, outcome=[0.2, 0.3], repetitions=2, movements_before=3)) == \
         GoalStatus.STATUS_ABORTED
     assert status_of(ReachGoal, "/reach_goal", ReachGoal.Goal(
-        goal=[0.2, 0.2], goal_index=1, movements_before=3)) == GoalStatus.STATUS_ABORTED
+        max_movements=5, movements_before=3)) == GoalStatus.STATUS_ABORTED

@@ -90,17 +90,18 @@ def test_execute_action_service_across_processes(peer, node):
     assert "5" in bad.message and len(bad.outcome) == 0
 
 
-def test_reach_goal_action_across_processes(peer, node):
+def test_an_action_with_feedback_across_processes(peer, node):
     from rclpy.action import ActionClient
 
-    from sgim_msgs.action import ReachGoal
+    from sgim_msgs.action import Imitate
 
     node, spin_until = node
-    client = ActionClient(node, ReachGoal, "/roundtrip/reach_goal")
+    client = ActionClient(node, Imitate, "/roundtrip/imitate")
     assert client.wait_for_server(timeout_sec=TIMEOUT)
     feedback = []
     send = client.send_goal_async(
-        ReachGoal.Goal(goal=[0.1, -0.3], goal_index=7, max_movements=3),
+        Imitate.Goal(action=[0.2] * 24, outcome=[0.1, -0.3], repetitions=3,
+                     movements_before=7),
         feedback_callback=lambda f: feedback.append(f.feedback.movements_done),
     )
     assert spin_until(send.done)
@@ -109,8 +110,8 @@ def test_reach_goal_action_across_processes(peer, node):
     result_future = handle.get_result_async()
     assert spin_until(result_future.done)
     result = result_future.result().result
-    assert list(result.reached) == pytest.approx([0.1, -0.3])
-    assert result.movements_used == 3 and result.competence == pytest.approx(-0.25)
+    assert list(result.best_outcome) == pytest.approx([0.1, -0.3])
+    assert result.movements_used == 3 and result.best_distance == pytest.approx(0.25)
     assert feedback and feedback == sorted(feedback) and feedback[-1] <= 3
 
 

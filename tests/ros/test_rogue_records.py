@@ -91,7 +91,7 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
     _cancel_all(client, "reach_goal")
     rogue = ActionClient(client.node, ReachGoal, "/reach_goal")
     if rogue.wait_for_server(timeout_sec=5):
-        rogue.send_goal_async(ReachGoal.Goal(goal=[0.2, 0.2], goal_index=1, movements_before=5))
+        rogue.send_goal_async(ReachGoal.Goal(max_movements=5, movements_before=5))
     client.spin_for(1.0)
     # A burst of valid demonstrations: more than the budget can hold.
     for k in range(BURST):

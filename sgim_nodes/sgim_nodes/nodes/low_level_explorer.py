@@ -1,33 +1,46 @@
-"""low_level_explorer: reaches one goal at a time (inverse model, Nelder-Mead, exploration).
+"""low_level_explorer: reaches goals, one after the other (inverse model, Nelder-Mead, exploration).
 
-Each `reach_goal` job is one core GoalAttempt driven movement by movement: its actions are
-executed through the simulator's `execute_action` service, and the job waits until each
+A `reach_goal` job spans the goals between two of the arbiter's boundaries (a teacher's turn,
+the budget, a human's pause or step): for each goal the explorer asks the goal generator
+(`choose_goal`, saying how many attempted goals its region tree must hold, so the choice never
+depends on message timing), then drives one core GoalAttempt movement by movement. Its actions
+are executed through the simulator's `execute_action` service, and the job waits until each
 movement has come back on the `movements` stream into its memory before the next step, as the
-single-process learner would. A cancel (the arbiter preempting for a demonstration) is
-honoured at the next movement boundary; the movement under way always completes. The
-attempt's competence is published on `competences` whenever it spent a movement (marked
-from_demonstration for a demonstrated outcome adopted as a goal: a goal-only demonstration);
-the result says whether the attempt ended by itself or was cut.
+single-process learner would. Each attempt's competence is published on `competences` as soon
+as it spent a movement (marked from_demonstration for a demonstrated outcome adopted as a
+goal: a goal-only demonstration, which the arbiter sends as a job of that one goal). Why the
+explorer, not the arbiter, asks for the next goal: three processes crossed in series at every
+goal (a ROS action's result, a service call, a new action) cost about 7 ms per goal, with 1.5
+movements per goal (README, "How a run flows").
+
+The job ends at its movement cap (the goal under way is cut there), after `max_goals` goals, or
+at a cancel (the arbiter preempting for a demonstration or a pause), honoured at the next
+movement boundary: the movement under way always completes, and no goal is chosen after the
+cancel. The result counts the job's movements and attempted goals, and describes its last goal
+(whether it ended by itself or was cut).
 
 Interfaces:
   subscribes  movements              (sgim_msgs/Movement)
   publishes   competences            (sgim_msgs/Competence)
-  serves      register_demonstration (sgim_msgs/srv/RegisterDemonstration)
+  serves      register_demonstration (sgim_msgs/srv/RegisterDemonstration), explorer_ready
   action      reach_goal             (sgim_msgs/action/ReachGoal)
-  client of   execute_action         (sgim_msgs/srv/ExecuteAction)
-Parameters: the common ones and every LearnerConfig field; service_timeout.
+  client of   execute_action         (sgim_msgs/srv/ExecuteAction),
+              choose_goal            (sgim_msgs/srv/ChooseGoal)
+Parameters: the common ones and every LearnerConfig field; service_timeout, service_retries,
+goal_timeout.
 """
 
 from __future__ import annotations
 
 from sgim_msgs.action import ReachGoal
 from sgim_msgs.msg import Competence
-from sgim_msgs.srv import ExecuteAction, RegisterDemonstration
+from sgim_msgs.srv import ChooseGoal, ExecuteAction, RegisterDemonstration
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.core.competence import competence, start_distance
 from sgim_nodes.core.environment import MovementResult
 from sgim_nodes.core.goal_reaching import GoalAttempt, probe_scale_for
 from sgim_nodes.core.random_streams import component_rng
+from sgim_nodes.nodes.graph_startup import call_bounded
 from sgim_nodes.nodes.movement_memory import MovementMemory
 from sgim_nodes.nodes.ros_glue import (
     PROCESS_CODES,
@@ -43,9 +56,19 @@ from sgim_nodes.nodes.ros_glue import (
 )
 from sgim_nodes.nodes.sim_client import SIM_CLIENT_PARAMS, SimClient
 from sgim_ros import qos
+from sgim_ros.params import Param, positive
 from sgim_ros.ready import serve_ready
 
-PARAMS = learner_node_params(*SIM_CLIENT_PARAMS)
+PARAMS = learner_node_params(
+    *SIM_CLIENT_PARAMS,
+    Param("goal_timeout", 600.0, "seconds to wait for the goal generator's answer to "
+          "choose_goal (it waits for the competences of the goals attempted before)", positive,
+          read_only=False),
+)
+
+
+class JobRefused(ValueError):
+    """A reach_goal job that cannot run (bad request, or no goal to attempt): aborted."""
 
 
 class LowLevelExplorer(AsyncNode):
@@ -62,8 +85,12 @@ class LowLevelExplorer(AsyncNode):
         if values["resume_from"]:
             self.memory.resume(resume_point(values["resume_from"], self.config,
                                  values["resume_segments"]))
-        # A missed movement would stall every reach job that waits for it (sgim_ros/ready.py).
-        serve_ready(self, "explorer_ready", {"movements": self.memory.subscription})
+        self.goal_timeout = values["goal_timeout"]
+        self.goal_client = self.create_client(ChooseGoal, "choose_goal")
+        # A missed movement would stall every reach job that waits for it, and the first job
+        # must find the goal generator (sgim_ros/ready.py).
+        serve_ready(self, "explorer_ready", {"movements": self.memory.subscription},
+                    servers={"choose_goal": self.goal_client})
         self.sim = SimClient(self, values)
         self._competences = self.create_publisher(Competence, "competences", qos.RECORDS)
         self.create_service(RegisterDemonstration, "register_demonstration", self._register)
@@ -84,41 +111,78 @@ class LowLevelExplorer(AsyncNode):
         return response
 
     async def _attempt(self, handle) -> ReachGoal.Result:
+        """The job: goals chosen and attempted until the cap, max_goals or a cancel."""
         request: ReachGoal.Goal = handle.request
         result = ReachGoal.Result(competence=-1.0)
-        why = check_vector(request.goal, self.outcome_size, "goal", bound=1.0)
+        try:
+            self._check(request)
+            await self.memory.reached(request.movements_before)
+            while not (handle.is_cancel_requested
+                       or result.movements_used >= request.max_movements
+                       or (request.max_goals and result.goals_attempted >= request.max_goals)):
+                demonstrated = list(request.demonstrated) if not result.goals_attempted else []
+                goal = await self._choose(request, result, demonstrated)
+                await self._reach(handle, request, result, goal, bool(demonstrated))
+                if demonstrated or not result.goal_movements:
+                    break  # a demonstrated goal is the job's only one; a goal cut at once ends it
+        except JobRefused as error:
+            self.get_logger().error(f"reach_goal job refused: {error}")
+            handle.abort()
+            return ReachGoal.Result(competence=-1.0)
+        result.cancelled = bool(handle.is_cancel_requested)
+        return result
+
+    def _check(self, request: ReachGoal.Goal) -> None:
+        why = ""
+        if request.max_movements < 1:
+            why = "max_movements must be at least 1 (the job's movement cap)"
+        elif len(request.demonstrated):
+            why = check_vector(request.demonstrated, self.outcome_size, "demonstrated goal",
+                               bound=1.0)
         if not why and request.movements_before < self.memory.count:
             why = (f"the job starts after movement {request.movements_before}, but the run is "
                    f"at movement {self.memory.count}: not this run's arbiter")
         if why:
-            self.get_logger().error(f"refused goal {request.goal_index}: {why}")
-            handle.abort()
-            return result
-        await self.memory.reached(request.movements_before)
-        goal = vec(request.goal)
+            raise JobRefused(why)
+
+    async def _choose(self, request: ReachGoal.Goal, result: ReachGoal.Result,
+                      demonstrated: list[float]):
+        """The next goal (a Goal), once the tree holds every goal attempted before it."""
+        reply = await call_bounded(self, self.goal_client, ChooseGoal.Request(
+            movement_index=request.movements_before + result.movements_used,
+            min_goal_count=request.goals_before + result.goals_attempted,
+            demonstrated=demonstrated), "choose_goal", self.goal_timeout, fatal=False)
+        if reply is None:
+            raise JobRefused(f"no answer from choose_goal after {self.goal_timeout:g} s: is "
+                             "the goal_generator node running?")
+        if not reply.ok:
+            raise JobRefused(f"the goal generator chose no goal: {reply.message}")
+        return reply.goal
+
+    async def _reach(self, handle, request: ReachGoal.Goal, result: ReachGoal.Result, chosen,
+                     demonstrated: bool) -> None:
+        """Attempt one goal up to the job's cap or a cancel; its competence published and the
+        result updated (the job's counts, and this goal as its last)."""
+        goal = vec(chosen.point)
         attempt = GoalAttempt(goal, self.memory.memory, self.memory.inverse_model, self.config,
                               self.scale, self.rng, self.action_size, self.probe_scale)
         used = 0
-        while not attempt.done:
-            if handle.is_cancel_requested:
-                result.cancelled = True
-                break
-            if request.max_movements and used >= request.max_movements:
-                break
+        while not (attempt.done or handle.is_cancel_requested
+                   or result.movements_used + used >= request.max_movements):
             action, label = attempt.next_action()
-            index = request.movements_before + used + 1
+            index = request.movements_before + result.movements_used + used + 1
             response = await self.sim.execute(ExecuteAction.Request(
                 action=floats(action), process=PROCESS_CODES[label], movement_index=index,
-                goal=floats(goal), goal_index=request.goal_index, record=True))
+                goal=floats(goal), goal_index=chosen.index, record=True))
             used += 1
             await self.memory.reached(index)
             outcome = vec(response.outcome) if len(response.outcome) else None
             attempt.observe(action, MovementResult(outcome, response.status))
-            handle.publish_feedback(ReachGoal.Feedback(movements_done=used,
-                                                       best_distance=attempt.best_distance))
-        result.movements_used = used
-        result.finished = attempt.done
+        result.movements_used += used
+        result.goal, result.goal_index = floats(goal), chosen.index
+        result.goal_movements, result.finished = used, attempt.done
         result.reached = floats(attempt.best_outcome)
+        result.competence = -1.0
         if attempt.best_outcome is not None:
             reference = (attempt.start_distance
                          if self.config.competence_reference == "memory"
@@ -127,12 +191,13 @@ class LowLevelExplorer(AsyncNode):
                                            self.distances.success_tolerance,
                                            self.distances.competence_floor)
         if used > 0:  # an attempted goal, even an interrupted one, counts for the interest
+            result.goals_attempted += 1
             self._competences.publish(Competence(
-                stamp=self.get_clock().now().to_msg(), goal_index=request.goal_index,
-                movement_index=request.movements_before + used, goal=floats(goal),
-                reached=result.reached, competence=result.competence, movements_used=used,
-                from_demonstration=request.demonstrated))
-        return result
+                stamp=self.get_clock().now().to_msg(), goal_index=chosen.index,
+                movement_index=request.movements_before + result.movements_used,
+                goal=result.goal, reached=result.reached,
+                competence=result.competence, movements_used=used,
+                from_demonstration=demonstrated))
 
 
 def main(args: list[str] | None = None) -> int:

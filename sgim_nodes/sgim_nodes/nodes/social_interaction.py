@@ -1,8 +1,9 @@
 """social_interaction: the arbiter that drives a run, movement budget to final evaluation.
 
-It owns the movement count and runs one job at a time: a goal attempt (`choose_goal`, then the
-explorer's `reach_goal` action), an imitation (`imitate`), or a random movement, according to
-the learner:
+It owns the movement count and runs one job at a time: goal attempts (the explorer's
+`reach_goal` action, which asks the goal generator for each goal itself and goes on from goal
+to goal up to the arbiter's next boundary), an imitation (`imitate`), or a random movement,
+according to the learner:
   sgim-d     goal babbling; each demonstration is registered in the explorer's memory,
              imitated `imitation_count` times, and its outcome enters the interest computation
              with the competence of the best imitation;
@@ -21,8 +22,9 @@ has no boundaries: the learner asks for help on `help_requests` when its progres
 
 What a demonstration shows (its `content`, core/teaching.py) decides what the learner does
 with it, as the single-process learner does: both parts (the paper's) are registered in the
-explorer's memory and imitated; a goal-only one is adopted as the next goal (choose_goal names
-it, Goal.MODE_DEMONSTRATION) and reached like any goal, its action never known; a means-only
+explorer's memory and imitated; a goal-only one is adopted as the next goal (a reach_goal job of
+that one goal, whose choose_goal names it, Goal.MODE_DEMONSTRATION) and reached like any goal,
+its action never known; a means-only
 one is imitated without a goal, nothing stored, no competence.
 
 The budget is exact: an imitation is cut to the movements left, and a demonstration that is
@@ -37,9 +39,10 @@ Interfaces:
               demonstrations_taken (Demonstration), pace_state (PaceState; human teacher only),
               help_requests (HelpRequest; timing on-request only)
   serves      pace (Pace; human teacher only)
-  clients of  choose_goal, register_demonstration, execute_action; actions reach_goal, imitate
+  clients of  register_demonstration, execute_action; actions reach_goal, imitate
 Parameters: the common ones, every LearnerConfig field, movements, teacher,
-demonstration_period, timing, wait_for_teacher, wait_for_evaluation, wait_for_recorder, timeouts.
+demonstration_period, timing, wait_for_teacher, wait_for_evaluation, wait_for_recorder,
+goals_per_job, timeouts.
 """
 
 from __future__ import annotations
@@ -51,7 +54,7 @@ from rclpy.duration import Duration
 
 from sgim_msgs.action import Imitate, ReachGoal
 from sgim_msgs.msg import Competence, Demonstration, Evaluation, Movement, RunStatus
-from sgim_msgs.srv import ChooseGoal, ExecuteAction, RegisterDemonstration
+from sgim_msgs.srv import ExecuteAction, RegisterDemonstration
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.bag.validation import Limits, LiveGate, teaching_set_size
 from sgim_nodes.core.competence import competence
@@ -103,9 +106,12 @@ PARAMS = learner_node_params(
           positive),
     Param("teacher_timeout", 60.0, "seconds to wait for the teacher at a boundary", positive,
           read_only=False),
-    Param("call_timeout", 600.0, "seconds to wait for the answer of choose_goal or "
-          "register_demonstration, or for the result of a reach_goal or imitate job",
-          positive, read_only=False),
+    Param("call_timeout", 600.0, "seconds to wait for the answer of register_demonstration, "
+          "or for the result of a reach_goal or imitate job", positive, read_only=False),
+    Param("goals_per_job", 50, "goals one reach_goal job may attempt before it reports back "
+          "(it stops earlier at the teacher's boundary, the budget, a pause or a "
+          "demonstration): a job's length stays bounded for call_timeout and progress; 1 "
+          "sends each goal as a job of its own", at_least(1)),
     Param("evaluation_timeout", 600.0, "seconds to wait for the final evaluation", positive,
           read_only=False),
     *SIM_CLIENT_PARAMS,
@@ -138,6 +144,9 @@ class SocialInteraction(AsyncNode):
         self.rng = component_rng(values["seed"], "random")
         self.count = 0
         self.goals_folded = 0  # competences published so far (by the explorer and by us)
+        # Goals per reach_goal job: with timing on-request, each attempt ends at the arbiter,
+        # which tells the help rule (help_asks.py) before it decides the next cap.
+        self.goals_per_job = 1 if on_request else values["goals_per_job"]
         self.latest_demo: Demonstration | None = None
         self.evaluated: set[int] = set()
         self.turns_taken: set[int] = set()  # teacher boundaries already handled
@@ -154,7 +163,6 @@ class SocialInteraction(AsyncNode):
             self.pace = PaceControl(self, self.total, values["demonstration_period"],
                                     values["wait_for_teacher"], self._preempt_goal)
         self.sim = SimClient(self, values)
-        self.goal_client = self.create_client(ChooseGoal, "choose_goal")
         self.register_client = self.create_client(RegisterDemonstration,
                                                   "register_demonstration")
         self.reach = ActionClient(self, ReachGoal, "reach_goal")
@@ -246,7 +254,7 @@ class SocialInteraction(AsyncNode):
         """The servers, publishers and listeners this run needs (graph_startup.py)."""
         expected = ExpectedGraph(servers=[(self.sim.client, "execute_action")])
         if self.learner in GOAL_BABBLERS:
-            expected.servers += [(self.goal_client, "choose_goal"), (self.reach, "reach_goal")]
+            expected.servers.append((self.reach, "reach_goal"))
             if self.social:
                 expected.servers.append((self.register_client, "register_demonstration"))
         if self.social:
@@ -310,8 +318,8 @@ class SocialInteraction(AsyncNode):
             self._progress()
 
     def _cap(self) -> int:
-        """Movements the next goal attempt may make: to the budget, the teacher's next
-        boundary, a human's pause or step, or where a stalled learner earns its next ask."""
+        """Movements the next job may make: to the budget, the teacher's next boundary, a
+        human's step, or where a stalled learner earns its next ask."""
         cap = self.total - self.count
         if self.sync_period:
             cap = min(cap, self.sync_period - self.count % self.sync_period)
@@ -389,20 +397,14 @@ class SocialInteraction(AsyncNode):
             self.goals_folded += 1
 
     async def _goal_attempt(self, cap: int, demonstrated=()) -> None:
-        """A goal drawn by the goal generator, or the `demonstrated` outcome adopted."""
-        reply = await self._call(self.goal_client, ChooseGoal.Request(
-            movement_index=self.count, min_goal_count=self.goals_folded,
-            demonstrated=list(demonstrated)), "choose_goal")
-        if not reply.ok:
-            raise RunAborted(f"goal generator: {reply.message}")
+        """Goals drawn by the goal generator and reached by the explorer, up to `cap`
+        movements and goals_per_job goals; or the `demonstrated` outcome adopted, alone."""
         result = await self._action(self.reach, ReachGoal.Goal(
-            goal=reply.goal.point, goal_index=reply.goal.index, max_movements=cap,
-            movements_before=self.count, demonstrated=bool(len(demonstrated))),
-            "reach_goal")
-        if result.movements_used > 0:
-            self.goals_folded += 1
-        if self.asks is not None:
-            self.asks.attempt_ended(vec(reply.goal.point), result.movements_used,
+            max_movements=cap, max_goals=self.goals_per_job, movements_before=self.count,
+            goals_before=self.goals_folded, demonstrated=list(demonstrated)), "reach_goal")
+        self.goals_folded += result.goals_attempted
+        if self.asks is not None:  # one goal per job: its attempt is the job's last
+            self.asks.attempt_ended(vec(result.goal), result.goal_movements,
                                     result.competence, result.finished, self.count)
 
     async def _imitation(self, demo: Demonstration, repetitions: int) -> Imitate.Result:

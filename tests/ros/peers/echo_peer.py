@@ -1,7 +1,7 @@
 """The other process of the interface round-trip test.
 
 It echoes every sgim_msgs message from /roundtrip/in/<Name> to /roundtrip/out/<Name>, serves
-ExecuteAction with a fake world (outcome = mean of each half of the action) and a ReachGoal
+ExecuteAction with a fake world (outcome = mean of each half of the action) and an Imitate
 action that reports feedback. It prints READY once everything is advertised.
 """
 
@@ -26,7 +26,7 @@ QOS = QoSProfile(depth=10, history=HistoryPolicy.KEEP_ALL, reliability=Reliabili
 class EchoPeer(Node):
     def __init__(self) -> None:
         super().__init__("echo_peer")
-        from sgim_msgs.action import ReachGoal
+        from sgim_msgs.action import Imitate
         from sgim_msgs.srv import ExecuteAction
 
         self._keep = []
@@ -37,7 +37,7 @@ class EchoPeer(Node):
                 self.create_subscription(cls, f"/roundtrip/in/{name}", pub.publish, QOS)
             )
         self.create_service(ExecuteAction, "/roundtrip/execute_action", self._execute)
-        self._action = ActionServer(self, ReachGoal, "/roundtrip/reach_goal", self._reach)
+        self._action = ActionServer(self, Imitate, "/roundtrip/imitate", self._imitate)
 
     def _execute(self, request, response):
         from sgim_msgs.msg import Movement
@@ -51,18 +51,18 @@ class EchoPeer(Node):
         response.outcome = [sum(action[:12]) / 12, sum(action[12:]) / 12]
         return response
 
-    def _reach(self, goal_handle):
-        from sgim_msgs.action import ReachGoal
+    def _imitate(self, goal_handle):
+        from sgim_msgs.action import Imitate
 
-        for k in range(3):
-            feedback = ReachGoal.Feedback(movements_done=k + 1, best_distance=1.0 / (k + 1))
-            goal_handle.publish_feedback(feedback)
+        request = goal_handle.request
+        for k in range(request.repetitions):
+            goal_handle.publish_feedback(Imitate.Feedback(movements_done=k + 1))
             time.sleep(0.05)
         goal_handle.succeed()
-        return ReachGoal.Result(
-            competence=-0.25,
-            reached=list(goal_handle.request.goal),
-            movements_used=3,
+        return Imitate.Result(
+            movements_used=request.repetitions,
+            best_outcome=list(request.outcome),
+            best_distance=0.25,
             cancelled=False,
         )
 

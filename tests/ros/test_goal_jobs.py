@@ -1,0 +1,106 @@
+"""The explorer's reach_goal jobs: one job goes from goal to goal, asking the goal generator for
+each, up to its movement cap, its goal count or a cancel, and its result accounts for every
+movement and every attempted goal it made (the arbiter's count and goals_folded rely on it)."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.conftest import REPO
+from tests.ros.graph_client import GraphClient
+
+pytestmark = pytest.mark.ros
+
+ROS2RUN = str(REPO / "ros_ws" / "ros2run.sh")
+
+
+@pytest.fixture
+def client(rclpy_context):
+    c = GraphClient(rclpy_context, "goal_jobs")
+    yield c
+    c.close()
+
+
+def test_a_job_spans_goals_up_to_its_cap_its_goal_count_or_a_cancel(ros_processes, client):
+    from action_msgs.msg import GoalStatus
+    from rclpy.action import ActionClient
+
+    from sgim_msgs.action import ReachGoal
+    from sgim_msgs.msg import Competence, Goal, Movement
+    from sgim_msgs.srv import RecorderReady
+    from sgim_ros import qos
+
+    moves = client.capture(Movement, "/movements", qos.RECORDS)
+    competences = client.capture(Competence, "/competences", qos.RECORDS)
+    goals = client.capture(Goal, "/goals", qos.RECORDS)
+    ros_processes.start("sim", [ROS2RUN, "sim_bridge", "sim_bridge"])
+    ros_processes.start("explorer", [ROS2RUN, "sgim_nodes", "low_level_explorer"])
+    # The explorer says it is ready only once it sees the goal generator it calls mid-job.
+    ready = client.node.create_client(RecorderReady, "/explorer_ready")
+    assert ready.wait_for_service(timeout_sec=60)
+    alone = client.call(ready, RecorderReady.Request())
+    assert not alone.ready and "choose_goal" in alone.message
+    ros_processes.start("goals", [ROS2RUN, "sgim_nodes", "goal_generator"])
+    assert client.spin_until(lambda: client.call(ready, RecorderReady.Request()).ready, 60)
+    reach = ActionClient(client.node, ReachGoal, "/reach_goal")
+    assert reach.wait_for_server(timeout_sec=60)
+    state = {"count": 0, "goals": 0}
+
+    def run_job(cancel_after: int | None = None, **fields):
+        sent = reach.send_goal_async(ReachGoal.Goal(
+            movements_before=state["count"], goals_before=state["goals"], **fields))
+        assert client.spin_until(sent.done)
+        handle = sent.result()
+        assert handle.accepted
+        if cancel_after is not None:
+            assert client.spin_until(lambda: len(moves) >= state["count"] + cancel_after, 120)
+            handle.cancel_goal_async()
+        done = handle.get_result_async()
+        assert client.spin_until(done.done, 120)
+        client.spin_for(0.5)  # every record of the job is in
+        response = done.result()
+        result = response.result
+        made = [m for m in moves if m.index > state["count"]]
+        attempted = [c for c in competences if c.movement_index > state["count"]]
+        # The result accounts for every movement, in order, and every attempted goal.
+        assert [m.index for m in made] == list(range(state["count"] + 1,
+                                                     state["count"] + 1 + result.movements_used))
+        assert result.goals_attempted == len(attempted) == len({m.goal_index for m in made})
+        assert sum(c.movements_used for c in attempted) == result.movements_used
+        # Each goal waited for the competences of every goal before it (the tree's count),
+        # and its movements follow it; the last one is the result's.
+        for c in attempted:
+            goal = next(g for g in goals if g.index == c.goal_index)
+            assert goal.movement_index == c.movement_index - c.movements_used
+        last = attempted[-1]
+        assert (result.goal_index, result.goal_movements) == (last.goal_index,
+                                                              last.movements_used)
+        assert list(result.goal) == pytest.approx(list(last.goal))
+        assert result.competence == pytest.approx(last.competence)
+        state["count"] += result.movements_used
+        state["goals"] += result.goals_attempted
+        return response.status, result
+
+    # The cap cuts the goal under way; the job went through several goals to get there.
+    status, result = run_job(max_movements=25)
+    assert status == GoalStatus.STATUS_SUCCEEDED and not result.cancelled
+    assert result.movements_used == 25 and result.goals_attempted >= 2
+    # A goal count ends the job after that many goals, each ended by itself.
+    status, result = run_job(max_movements=200, max_goals=2)
+    assert status == GoalStatus.STATUS_SUCCEEDED
+    assert result.goals_attempted == 2 and result.finished and result.movements_used < 200
+    # A cancel is honoured at the next movement boundary: the movement under way completes,
+    # and the job stops there, whichever goal it was on.
+    status, result = run_job(cancel_after=12, max_movements=1000)
+    assert status == GoalStatus.STATUS_CANCELED and result.cancelled
+    assert 12 <= result.movements_used <= 14 and result.goals_attempted >= 2
+    # A job that does not start at the run's count, or has no cap, is refused.
+    for bad in (ReachGoal.Goal(max_movements=5, movements_before=state["count"] - 1),
+                ReachGoal.Goal(max_movements=0, movements_before=state["count"])):
+        sent = reach.send_goal_async(bad)
+        assert client.spin_until(sent.done)
+        done = sent.result().get_result_async()
+        assert client.spin_until(done.done)
+        assert done.result().status == GoalStatus.STATUS_ABORTED
+    client.spin_for(0.5)
+    assert moves[-1].index == state["count"]
