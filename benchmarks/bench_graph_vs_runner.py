@@ -116,6 +116,9 @@ def main() -> int:
     p.add_argument("--eval-every", type=int, default=250)
     p.add_argument("--graph-only", action="store_true",
                    help="skip the runner: the graph's time and CPU only (to compare changes)")
+    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="a node parameter for the graph run (run_experiment.sh --param), e.g. "
+                        "goals_per_job=1 to time one reach_goal job per goal")
     args = p.parse_args()
     out = Path(tempfile.mkdtemp(prefix="bench-graph-"))
     common = ["--seed", str(args.seed), "--movements", str(args.movements), "--eval-every",
@@ -133,7 +136,8 @@ def main() -> int:
     sampler.start()
     start = time.perf_counter()
     subprocess.run([str(REPO / "ros_ws" / "run_experiment.sh"), args.learner, *common,
-                    "--runs-dir", str(out), "--name", "graph", "--quiet"], check=True)
+                    "--runs-dir", str(out), "--name", "graph", "--quiet",
+                    *(arg for item in args.param for arg in ("--param", item))], check=True)
     graph_s = time.perf_counter() - start
     sampler.stopping.set()
     sampler.join()
@@ -142,7 +146,8 @@ def main() -> int:
 
     run = load_run(out / "graph" / "bag")
     print(f"learner {args.learner}, seed {args.seed}, {args.movements} movements, "
-          f"evaluation every {args.eval_every}")
+          f"evaluation every {args.eval_every}"
+          + "".join(f", {item}" for item in args.param))
     if not args.graph_only:
         records = [json.loads(line)
                    for line in (out / "runner.jsonl").read_text().splitlines()]
