@@ -208,6 +208,22 @@ def test_on_request_timing_through_the_graph(ros_processes, ros_domain, tmp_path
                    for m in run.movements[k: k + IMITATIONS])
 
 
+def test_where_reach_goal_jobs_end_changes_no_movement(ros_processes, ros_domain, tmp_path):
+    """A reach_goal job spans goals up to the arbiter's next boundary; with two goals per job
+    the jobs end at other goal boundaries than the default's, and the run is still the
+    runner's, movement for movement (the explorer's choose_goal waits for every competence)."""
+    run = finish(run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--param",
+                           f"tolerance_noise={TOLERANCE['sgim-d']}", "--param",
+                           "goals_per_job=2"), tmp_path, "sgim-d")
+    moves = [r for r in run_single_process("sgim-d") if r["type"] == "movement"]
+    assert len(run.movements) == len(moves) == MOVEMENTS
+    for graph_move, move in zip(run.movements, moves, strict=True):
+        assert np.array_equal(graph_move.action, np.asarray(move["action"])), graph_move.index
+    # Every goal drawn was attempted: no job chose a goal it then did not reach for.
+    assert {g.index for g in run.goals} == {c.goal_index for c in run.competences
+                                            if c.goal_index}
+
+
 @pytest.mark.parametrize("learner", ["sgim-d", "saggriac", "random-goals", "demo-only",
                                      "random"])
 def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner):

@@ -1,6 +1,6 @@
 """The arbiter's jobs and waits: one action job at a time, and waits on the run's events.
 
-A goal attempt (`reach_goal`) or an imitation (`imitate`) is a ROS action so that the arbiter
+Goal attempts (`reach_goal`) or an imitation (`imitate`) are a ROS action so that the arbiter
 can cut it at its next movement boundary when a demonstration or a pause comes: `JobSlot`
 holds the running job's handle for that. A job counts only with a known end (succeeded or
 cancelled): a result with any other status would add an unknown number of movements, so it
