@@ -4,6 +4,8 @@ movement and every attempted goal it made (the arbiter's count and goals_folded 
 
 from __future__ import annotations
 
+import itertools
+
 import pytest
 
 from tests.conftest import REPO
@@ -47,8 +49,10 @@ def test_a_job_spans_goals_up_to_its_cap_its_goal_count_or_a_cancel(ros_processe
     state = {"count": 0, "goals": 0}
 
     def run_job(cancel_after: int | None = None, **fields):
+        feedback: list[int] = []
         sent = reach.send_goal_async(ReachGoal.Goal(
-            movements_before=state["count"], goals_before=state["goals"], **fields))
+            movements_before=state["count"], goals_before=state["goals"], **fields),
+            feedback_callback=lambda f: feedback.append(f.feedback.movements_done))
         assert client.spin_until(sent.done)
         handle = sent.result()
         assert handle.accepted
@@ -77,6 +81,11 @@ def test_a_job_spans_goals_up_to_its_cap_its_goal_count_or_a_cancel(ros_processe
                                                               last.movements_used)
         assert list(result.goal) == pytest.approx(list(last.goal))
         assert result.competence == pytest.approx(last.competence)
+        # Feedback after each goal: the job's movements so far (the arbiter's progress), at
+        # goal ends only, up to the job's whole count.
+        ends = set(itertools.accumulate(c.movements_used for c in attempted))
+        assert feedback and feedback == sorted(feedback) and set(feedback) <= ends
+        assert feedback[-1] == result.movements_used
         state["count"] += result.movements_used
         state["goals"] += result.goals_attempted
         return response.status, result

@@ -37,11 +37,13 @@ class JobSlot:
             self.handle.cancel_goal_async()
 
     async def run(self, client: ActionClient, goal, name: str, movement: int, timeout: float,
-                  cut_at_once: bool = False):
+                  cut_at_once: bool = False, feedback: Callable[[object], None] | None = None):
         """Send `goal`, wait for its result (RunAborted after `timeout` or on an unknown end)
         and return it; `cut_at_once` cancels it as soon as it is accepted (a demonstration or
-        a pause came while it was being sent)."""
-        sent = client.send_goal_async(goal)
+        a pause came while it was being sent); `feedback` gets the job's feedback messages."""
+        sent = client.send_goal_async(
+            goal, feedback_callback=None if feedback is None else
+            (lambda message: feedback(message.feedback)))
         if not await first_of(self.node, sent, timeout):
             raise RunAborted(f"'{name}' did not answer a job request in {timeout:g} s")
         handle = sent.result()

@@ -191,6 +191,7 @@ class LowLevelExplorer(AsyncNode):
                                            self.distances.success_tolerance,
                                            self.distances.competence_floor)
         if used > 0:  # an attempted goal, even an interrupted one, counts for the interest
+            handle.publish_feedback(ReachGoal.Feedback(movements_done=result.movements_used))
             result.goals_attempted += 1
             self._competences.publish(Competence(
                 stamp=self.get_clock().now().to_msg(), goal_index=chosen.index,

@@ -415,7 +415,9 @@ class SocialInteraction(AsyncNode):
     async def _action(self, client: ActionClient, goal, name: str):
         held = self.inbox.pending or (self.pace is not None and self.pace.paused)
         result = await self.job.run(client, goal, name, self.count, self.p["call_timeout"],
-                                    cut_at_once=bool(held) and name == "reach_goal")
+                                    cut_at_once=bool(held) and name == "reach_goal",
+                                    feedback=lambda f: self._progress(self.count
+                                                                      + f.movements_done))
         self.count += result.movements_used
         return result
 
@@ -439,19 +441,23 @@ class SocialInteraction(AsyncNode):
         self._publish_status(RunStatus.STATE_RUNNING, line)
 
     # --- progress -------------------------------------------------------------------------
-    def _progress(self) -> None:
-        if self.count - self._last_log >= max(1, self.total // 20) or self.count >= self.total:
-            self._last_log = self.count
-            rate = self.count / max(1e-9, time.monotonic() - self._started)
-            self.get_logger().info(f"{self.count}/{self.total} movements "
-                                   f"({100 * self.count / self.total:.0f} %, {rate:.1f}/s)")
-            self._publish_status(RunStatus.STATE_RUNNING, "")
+    def _progress(self, count: int | None = None) -> None:
+        """Every 5 % of the budget: a log line and a RunStatus. `count`: the movements done
+        so far when a job under way reports them (its feedback after each goal), since the
+        arbiter's own count moves only when a job ends."""
+        count = self.count if count is None else count
+        if count - self._last_log >= max(1, self.total // 20) or count >= self.total:
+            self._last_log = count
+            rate = count / max(1e-9, time.monotonic() - self._started)
+            self.get_logger().info(f"{count}/{self.total} movements "
+                                   f"({100 * count / self.total:.0f} %, {rate:.1f}/s)")
+            self._publish_status(RunStatus.STATE_RUNNING, "", count)
 
-    def _publish_status(self, state: int, message: str) -> None:
+    def _publish_status(self, state: int, message: str, count: int | None = None) -> None:
         self._status.publish(RunStatus(
             stamp=self.get_clock().now().to_msg(), learner=self.learner, seed=self.p["seed"],
-            movement_index=self.count, total_movements=self.total, state=state,
-            message=message))
+            movement_index=self.count if count is None else count,
+            total_movements=self.total, state=state, message=message))
 
 
 def main(args: list[str] | None = None) -> int:
