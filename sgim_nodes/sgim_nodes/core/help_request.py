@@ -34,7 +34,9 @@ ON_REQUEST = "on-request"
 TIMINGS = (PERIOD, ON_REQUEST)
 DEFAULT_TIMING = PERIOD
 DEFAULT_WINDOW = 20
-"""ζ of the region tree (LearnerConfig.zeta): the paper's window for competence progress."""
+"""Own goal attempts over which progress is judged: the region tree's ζ when the on-request
+rule was built and measured (docs/social_modes.md); kept at 20 when the tree's ζ became 50
+(docs/learners.md, section 4c), so the rule and its measurements stay as documented."""
 DEFAULT_STALL_SE = 1.0
 """Progress within one standard error of zero counts as none (the same test as the region
 tree's optional ``interest_noise_correction`` at c = 1)."""
