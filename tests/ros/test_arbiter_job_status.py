@@ -35,7 +35,7 @@ class _Client:
                                       get_result_async=lambda: _done(response),
                                       cancel_goal_async=lambda: _done(None))
 
-    def send_goal_async(self, _goal) -> Future:
+    def send_goal_async(self, _goal, feedback_callback=None) -> Future:
         return _done(self.handle)
 
 

@@ -414,10 +414,12 @@ class SocialInteraction(AsyncNode):
 
     async def _action(self, client: ActionClient, goal, name: str):
         held = self.inbox.pending or (self.pace is not None and self.pace.paused)
+        # Feedback counts from the job's start: one that arrives after the result (a topic
+        # and a service answer keep no order between them) is then behind, never ahead.
+        start = self.count
         result = await self.job.run(client, goal, name, self.count, self.p["call_timeout"],
                                     cut_at_once=bool(held) and name == "reach_goal",
-                                    feedback=lambda f: self._progress(self.count
-                                                                      + f.movements_done))
+                                    feedback=lambda f: self._progress(start + f.movements_done))
         self.count += result.movements_used
         return result
 
@@ -446,6 +448,8 @@ class SocialInteraction(AsyncNode):
         so far when a job under way reports them (its feedback after each goal), since the
         arbiter's own count moves only when a job ends."""
         count = self.count if count is None else count
+        if count <= self._last_log:  # said already (a job's feedback, then its end)
+            return
         if count - self._last_log >= max(1, self.total // 20) or count >= self.total:
             self._last_log = count
             rate = count / max(1e-9, time.monotonic() - self._started)
