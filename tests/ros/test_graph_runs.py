@@ -243,8 +243,8 @@ def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner)
     assert all(len(e.distances) == len(run.evaluations[0].distances) > 50
                for e in run.evaluations)
     assert run.run_status[-1].state == RunStatus.STATE_FINISHED
-    # RunStatus as its message file says: "started", then at the first job boundary after
-    # every further 5 % of the budget, "movement budget spent" and "finished".
+    # RunStatus as its message file says: "started", then at the first goal's end or job
+    # boundary after every further 5 % of the budget, "movement budget spent" and "finished".
     statuses = run.run_status
     assert (statuses[0].message, statuses[0].movement_index) == ("started", 0)
     assert [s.message for s in statuses[-2:]] == ["movement budget spent", "finished"]
