@@ -131,6 +131,15 @@ class LearnerConfig:
     casts is fitted to their noise: on a sparse fishing memory such steps made the inverse
     model worse than the nearest neighbour (docs/learners.md, section 1). 10 keeps the whole
     benefit of the step on the arms' validation goals (25 lost part of it). Chosen."""
+    local_rank_min_casts: float = 5.0
+    """The local-linear inverse ranks a candidate by its fit's prediction only when that fit
+    averages at least this many casts; a candidate with a thinner fit is ranked by its own
+    stored outcome, as the nearest neighbour ranks it. A prediction from a handful of casts
+    carries their noise and the curvature between them: on the arms' random motor babbling
+    memories, where fits are thin, ranking by it lost to the nearest neighbour in half of the
+    runs by up to 0.0005, and with 5 it gives the nearest neighbour's answer there; 3 still
+    lost once in 10, 10 gave up part of the ranking's gain on SAGG-RIAC's 20-joint memories
+    (docs/learners.md, section 1). Chosen by measurement on the arms' validation goals."""
     local_step_check: str = "held-out"
     """``held-out``: the local-linear inverse takes its step only when the gain it predicts
     exceeds the fit's leave-one-out error beyond the world's noise (inverse_model.py); a
@@ -227,7 +236,7 @@ class LearnerConfig:
                 fail(name, "must be > 0")
         for name in ("alpha", "explore_gain", "min_region_width_size", "explore_action",
                      "success_tolerance_noise", "interest_noise_correction",
-                     "local_min_casts"):
+                     "local_min_casts", "local_rank_min_casts"):
             if getattr(self, name) < 0.0:
                 fail(name, "must be >= 0")
         if not 0.0 <= self.explore_cap <= 1.0:
@@ -267,7 +276,7 @@ class LearnerConfig:
         return [f.name for f in fields(cls)]
 
 
-BEFORE_IT_EXISTED: dict[str, Any] = {"local_step_check": "none"}
+BEFORE_IT_EXISTED: dict[str, Any] = {"local_step_check": "none", "local_rank_min_casts": 0.0}
 """For a field added after runs were recorded: the value that does what the learner did before
 the field existed. A run recorded then, resumed today, goes on as it ran (recorded_learner)."""
 

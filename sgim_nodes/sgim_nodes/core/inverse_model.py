@@ -13,8 +13,9 @@ linear model fitted in that action's own neighbourhood:
 - ``local-linear``: among the l_max candidates, the action whose outcome, as predicted by a
   linear model fitted on the pairs around it in action space (local_model.py), lies closest
   to the goal: the prediction averages the noise of every cast near the action, where a
-  single stored outcome carries it whole. A candidate with no close pairs is ranked by its own
-  stored outcome, so on a memory with no clusters this is the nearest neighbour. The chosen
+  single stored outcome carries it whole. A candidate with no close pairs, or whose fit
+  averages fewer than ``rank_min_casts`` casts, is ranked by its own stored outcome, so on a
+  memory with no clusters this is the nearest neighbour. The chosen
   action is then moved by one step of that model towards the goal, no farther than
   ``local_step`` (a quarter of the fitted radius by default: measured, docs/learners.md),
   and only when the fit averages at least ``min_casts`` casts: a fit on a handful of casts
@@ -66,7 +67,8 @@ class InverseModel:
     def __init__(self, memory: Memory, method: str = "reliable", l_max: int = 10,
                  k_max: int = 5, alpha: float = 0.5, local_radius: float = 1.0,
                  local_neighbours: int = 60, local_step: float = 0.25,
-                 min_casts: float = 0.0, noise_rms: float | None = None) -> None:
+                 min_casts: float = 0.0, noise_rms: float | None = None,
+                 rank_min_casts: float = 0.0) -> None:
         if method not in ("nearest", "reliable", "local-linear"):
             raise ValueError(f"unknown inverse model {method!r}")
         self.memory = memory
@@ -79,6 +81,7 @@ class InverseModel:
         self.local_step = local_step
         self.min_casts = min_casts
         self.noise_rms = noise_rms
+        self.rank_min_casts = rank_min_casts
 
     def most_reliable(self, goal: np.ndarray) -> tuple[int, float]:
         """Memory index and score of the most reliable of the l_max candidates."""
@@ -125,12 +128,15 @@ class InverseModel:
     def best_predicted(self, goal: np.ndarray
                        ) -> tuple[int, float, np.ndarray, local_model.LocalFit | None]:
         """The candidate whose locally predicted outcome is nearest to the goal: memory index,
-        that distance, the predicted outcome and the fit (None: too few pairs around it)."""
+        that distance, the predicted outcome and the fit (None: too few pairs around it, or a
+        fit averaging fewer than ``rank_min_casts`` casts; then the stored outcome ranks)."""
         mem = self.memory
         _, cand_i = mem.nearest(goal, self.l_max)
         best: tuple[int, float, np.ndarray, local_model.LocalFit | None] | None = None
         for i in cand_i:
             fit = local_model.fit(mem, mem.actions[i], self.local_radius, self.local_neighbours)
+            if fit is not None and fit.n_effective < self.rank_min_casts:
+                fit = None  # too few casts to predict better than the stored outcome
             predicted = mem.outcomes[i] if fit is None else fit.outcome
             d = float(np.linalg.norm(predicted - goal))
             if best is None or d < best[1]:
