@@ -17,6 +17,7 @@ from rclpy.task import Future
 
 from sgim_msgs.srv import RecorderReady
 from sgim_nodes.bag.types import RECORDED_TOPICS
+from sgim_nodes.core.learners import GOAL_BABBLERS
 from sgim_ros.entry import first_of
 
 POLL_SECONDS = 0.1
@@ -34,6 +35,36 @@ class ExpectedGraph:
     servers: list[tuple[object, str]] = field(default_factory=list)  # (client, name)
     publishers: list[str] = field(default_factory=list)  # topics someone must publish
     listeners: list[tuple[str, str]] = field(default_factory=list)  # (ready service, who)
+
+
+def arbiter_graph(learner: str, social: bool, automatic: bool, wait_for_recorder: bool,
+                  wait_for_evaluation: bool, *, execute, reach, register,
+                  imitate) -> ExpectedGraph:
+    """What the arbiter of a `learner` run needs: the servers of its clients (`execute`,
+    `reach`, `register`, `imitate`) that this learner calls, the evaluator and the automatic
+    teacher heard, and every node that listens to the run's records hearing it from its
+    first record (sgim_ros/ready.py)."""
+    expected = ExpectedGraph(servers=[(execute, "execute_action")])
+    if learner in GOAL_BABBLERS:
+        expected.servers.append((reach, "reach_goal"))
+        if social:
+            expected.servers.append((register, "register_demonstration"))
+    if social:
+        expected.servers.append((imitate, "imitate"))
+    expected.publishers = [topic for needed, topic in ((wait_for_evaluation, "evaluations"),
+                                                       (automatic, "demonstrations"))
+                           if needed]
+    wanted = [
+        (wait_for_recorder, "recorder_ready",
+         "the recorder node (or set wait_for_recorder to false)"),
+        (wait_for_evaluation, "evaluator_ready", "the evaluator node"),
+        (learner in GOAL_BABBLERS, "explorer_ready", "the low_level_explorer node"),
+        (learner in GOAL_BABBLERS, "goal_generator_ready", "the goal_generator node"),
+        (social, "imitation_ready", "the imitation node"),
+        (automatic, "teacher_ready", "the teacher node"),
+    ]
+    expected.listeners = [(service, who) for needed, service, who in wanted if needed]
+    return expected
 
 
 async def call_bounded(node: Node, client, request, name: str, timeout: float,

@@ -67,6 +67,7 @@ from sgim_nodes.nodes.demonstration_inbox import DemonstrationInbox, shown
 from sgim_nodes.nodes.graph_startup import (
     ExpectedGraph,
     RunAborted,
+    arbiter_graph,
     call_bounded,
     wait_for_graph,
 )
@@ -81,6 +82,7 @@ from sgim_nodes.nodes.ros_glue import (
     vec,
     world_scale,
 )
+from sgim_nodes.nodes.run_progress import RunProgress
 from sgim_nodes.nodes.sim_client import SIM_CLIENT_PARAMS, SimClient, SimulatorError
 from sgim_ros import qos
 from sgim_ros.params import Param, ParameterError, at_least, non_negative, one_of, positive
@@ -111,7 +113,9 @@ PARAMS = learner_node_params(
     Param("goals_per_job", 50, "goals one reach_goal job may attempt before it reports back "
           "(it stops earlier at the teacher's boundary, the budget, a pause or a "
           "demonstration): a job's length stays bounded for call_timeout and progress; 1 "
-          "sends each goal as a job of its own", at_least(1)),
+          "sends each goal as a job of its own, as timing 'on-request' always does (the "
+          "help rule decides after each goal) and a goal-only demonstration does (its goal "
+          "is the job's only one)", at_least(1)),
     Param("evaluation_timeout", 600.0, "seconds to wait for the final evaluation", positive,
           read_only=False),
     *SIM_CLIENT_PARAMS,
@@ -153,8 +157,8 @@ class SocialInteraction(AsyncNode):
         self.finished, self.exit_code = False, 0
         self.job = JobSlot(self)  # the running action, to cut on a demonstration
         self.waits = Waits(self)
-        self._started = time.monotonic()
-        self._last_log = 0
+        self.progress = RunProgress(self, self.learner, values["seed"], self.total,
+                                    lambda: self.count)
 
         self.asks = (HelpAsks(self, self.total, values["demonstration_period"])
                      if on_request else None)
@@ -167,7 +171,6 @@ class SocialInteraction(AsyncNode):
                                                   "register_demonstration")
         self.reach = ActionClient(self, ReachGoal, "reach_goal")
         self.imitate = ActionClient(self, Imitate, "imitate")
-        self._status = self.create_publisher(RunStatus, "run_status", qos.RECORDS)
         self._taken = self.create_publisher(Demonstration, "demonstrations_taken", qos.RECORDS)
         self.gate = LiveGate(self.get_logger().error, Limits(
             values["action_size"], values["outcome_size"], budget=self.total,
@@ -227,55 +230,35 @@ class SocialInteraction(AsyncNode):
         try:
             await wait_for_graph(self, self._expected_graph(), self.p["startup_timeout"],
                                  self.p["settle_time"])
-            self._publish_status(RunStatus.STATE_RUNNING,
-                                 f"resumed at {self.count}" if self.count else "started")
+            self.progress.say(RunStatus.STATE_RUNNING,
+                              f"resumed at {self.count}" if self.count else "started")
             await self._run()
             self.inbox.refuse_waiting()
-            self._publish_status(RunStatus.STATE_RUNNING, "movement budget spent")
+            self.progress.say(RunStatus.STATE_RUNNING, "movement budget spent")
             if self.p["wait_for_evaluation"]:
                 await self.waits.until(lambda: self.total in self.evaluated,
                                        self.p["evaluation_timeout"],
                                        f"the evaluation at movement {self.total} (evaluator)")
             if self.inbox.refused:
-                self._publish_status(RunStatus.STATE_RUNNING, f"{self.inbox.refused} "
-                                     "demonstrations refused in all (see the arbiter's log)")
-            self._publish_status(RunStatus.STATE_FINISHED, "finished")
+                self.progress.say(RunStatus.STATE_RUNNING, f"{self.inbox.refused} "
+                                  "demonstrations refused in all (see the arbiter's log)")
+            self.progress.say(RunStatus.STATE_FINISHED, "finished")
             self.get_logger().info(f"run finished: {self.count} movements in "
-                                   f"{time.monotonic() - self._started:.1f} s")
+                                   f"{time.monotonic() - self.progress.started:.1f} s")
         except (RunAborted, SimulatorError) as error:
             self.get_logger().error(f"run aborted: {error}")
-            self._publish_status(RunStatus.STATE_ABORTED, str(error))
+            self.progress.say(RunStatus.STATE_ABORTED, str(error))
             self.exit_code = 1
         # The last status must reach the recorder and the launcher before this process ends.
-        self._status.wait_for_all_acked(Duration(seconds=5.0))
+        self.progress.publisher.wait_for_all_acked(Duration(seconds=5.0))
         self.finished = True
 
     def _expected_graph(self) -> ExpectedGraph:
         """The servers, publishers and listeners this run needs (graph_startup.py)."""
-        expected = ExpectedGraph(servers=[(self.sim.client, "execute_action")])
-        if self.learner in GOAL_BABBLERS:
-            expected.servers.append((self.reach, "reach_goal"))
-            if self.social:
-                expected.servers.append((self.register_client, "register_demonstration"))
-        if self.social:
-            expected.servers.append((self.imitate, "imitate"))
-        # The evaluator and the automatic teacher must be heard; every node that listens to
-        # the run's records must hear it from its first record (sgim_ros/ready.py).
-        evaluated = self.p["wait_for_evaluation"]
-        expected.publishers = [topic for needed, topic in ((evaluated, "evaluations"),
-                                                           (self.automatic, "demonstrations"))
-                               if needed]
-        wanted = [
-            (self.p["wait_for_recorder"], "recorder_ready",
-             "the recorder node (or set wait_for_recorder to false)"),
-            (evaluated, "evaluator_ready", "the evaluator node"),
-            (self.learner in GOAL_BABBLERS, "explorer_ready", "the low_level_explorer node"),
-            (self.learner in GOAL_BABBLERS, "goal_generator_ready", "the goal_generator node"),
-            (self.social, "imitation_ready", "the imitation node"),
-            (self.automatic, "teacher_ready", "the teacher node"),
-        ]
-        expected.listeners = [(service, who) for needed, service, who in wanted if needed]
-        return expected
+        return arbiter_graph(self.learner, self.social, self.automatic,
+                             self.p["wait_for_recorder"], self.p["wait_for_evaluation"],
+                             execute=self.sim.client, reach=self.reach,
+                             register=self.register_client, imitate=self.imitate)
 
     async def _call(self, client, request, name: str):
         """A service call that gives up after call_timeout (RunAborted naming the service)."""
@@ -315,7 +298,7 @@ class SocialInteraction(AsyncNode):
             else:
                 await self._random_movement()
             self._paced()
-            self._progress()
+            self.progress.moved()
 
     def _cap(self) -> int:
         """Movements the next job may make: to the budget, the teacher's next boundary, a
@@ -419,7 +402,8 @@ class SocialInteraction(AsyncNode):
         start = self.count
         result = await self.job.run(client, goal, name, self.count, self.p["call_timeout"],
                                     cut_at_once=bool(held) and name == "reach_goal",
-                                    feedback=lambda f: self._progress(start + f.movements_done))
+                                    feedback=lambda f: self.progress.moved(
+                                        start + f.movements_done))
         self.count += result.movements_used
         return result
 
@@ -440,28 +424,7 @@ class SocialInteraction(AsyncNode):
 
     def _say_refusal(self, line: str) -> None:
         self.get_logger().warning(line)
-        self._publish_status(RunStatus.STATE_RUNNING, line)
-
-    # --- progress -------------------------------------------------------------------------
-    def _progress(self, count: int | None = None) -> None:
-        """Every 5 % of the budget: a log line and a RunStatus. `count`: the movements done
-        so far when a job under way reports them (its feedback after each goal), since the
-        arbiter's own count moves only when a job ends."""
-        count = self.count if count is None else count
-        if count <= self._last_log:  # said already (a job's feedback, then its end)
-            return
-        if count - self._last_log >= max(1, self.total // 20) or count >= self.total:
-            self._last_log = count
-            rate = count / max(1e-9, time.monotonic() - self._started)
-            self.get_logger().info(f"{count}/{self.total} movements "
-                                   f"({100 * count / self.total:.0f} %, {rate:.1f}/s)")
-            self._publish_status(RunStatus.STATE_RUNNING, "", count)
-
-    def _publish_status(self, state: int, message: str, count: int | None = None) -> None:
-        self._status.publish(RunStatus(
-            stamp=self.get_clock().now().to_msg(), learner=self.learner, seed=self.p["seed"],
-            movement_index=self.count if count is None else count,
-            total_movements=self.total, state=state, message=message))
+        self.progress.say(RunStatus.STATE_RUNNING, line)
 
 
 def main(args: list[str] | None = None) -> int:
