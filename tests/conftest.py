@@ -14,6 +14,7 @@ from sgim_nodes.graph.domain import isolated_ros_environment, reserve_domain
 from sgim_nodes.graph.processes import ProcessGroup, group_is_empty
 
 REPO = Path(__file__).resolve().parent.parent
+ROS2RUN = str(REPO / "ros_ws" / "ros2run.sh")  # runs a node of the built workspace
 
 
 def _ros_missing() -> str | None:

@@ -6,16 +6,15 @@ import random
 import time
 from pathlib import Path
 
-from tests.conftest import PYTHON, REPO
+from tests.conftest import PYTHON, REPO, ROS2RUN
 
-ROS2RUN = REPO / "ros_ws" / "ros2run.sh"
 INSTALLED = REPO / "ros_ws" / "install" / "sgim_nodes" / "lib" / "sgim_nodes"
 
 
 def node_command(executable: str, module: str) -> list[str]:
     """`ros2run.sh sgim_nodes EXE` once the entry point is installed, else `python -m`."""
     if (INSTALLED / executable).exists():
-        return [str(ROS2RUN), "sgim_nodes", executable]
+        return [ROS2RUN, "sgim_nodes", executable]
     return [PYTHON, "-m", module]
 
 

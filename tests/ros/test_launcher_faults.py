@@ -14,12 +14,11 @@ import pytest
 import yaml
 
 from sgim_nodes.graph.processes import run_node_pids
-from tests.conftest import REPO
+from tests.conftest import REPO, ROS2RUN
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
 RUN = str(REPO / "ros_ws" / "run_experiment.sh")
-ROS2RUN = str(REPO / "ros_ws" / "ros2run.sh")
 SILENT = [sys.executable, str(REPO / "tests" / "ros" / "peers" / "silent_peer.py")]
 
 

@@ -6,11 +6,10 @@ import subprocess
 
 import pytest
 
-from tests.conftest import REPO
+from tests.conftest import ROS2RUN
 
 pytestmark = pytest.mark.ros
 
-ROS2RUN = str(REPO / "ros_ws" / "ros2run.sh")
 
 CASES = [
     ("sgim_nodes", "interest_computer", "zeta:=7", "zeta"),  # must be even

@@ -7,12 +7,10 @@ import subprocess
 
 import pytest
 
-from tests.conftest import REPO
+from tests.conftest import ROS2RUN
 from tests.ros.graph_client import GraphClient
 
 pytestmark = pytest.mark.ros
-
-ROS2RUN = str(REPO / "ros_ws" / "ros2run.sh")
 
 
 def _set(client, node: str, **values):

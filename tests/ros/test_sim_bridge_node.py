@@ -7,12 +7,11 @@ import subprocess
 import numpy as np
 import pytest
 
-from tests.conftest import REPO
+from tests.conftest import ROS2RUN
 from tests.ros.graph_client import GraphClient
 
 pytestmark = pytest.mark.ros
 
-ROS2RUN = str(REPO / "ros_ws" / "ros2run.sh")
 SEED = 5
 
 
