@@ -1,18 +1,21 @@
 """The inverse models compared on the same memories (issue 10, item 1).
 
-A SAGG-RIAC learner (default configuration) runs ``--movements`` movements on each analytic
-arm; its final memory is then queried by every inverse model of core/inverse_model.py
-(``nearest``, ``reliable``, ``local-linear``, and the paper's Gaussian interpolation of
-several neighbours' actions for reference; and ``local-linear`` without its held-out step
-check, and without its step at all), on the arm's VALIDATION goals (the benchmark goals
-stay untouched by choices), and each chosen action is cast on the noise-free arm, so the
-figure is the inverse model's own error on that memory, free of cast noise.
+A learner (``--learner``, SAGG-RIAC by default, default configuration) runs ``--movements``
+movements on each analytic arm; its final memory is then queried by every inverse model of
+core/inverse_model.py (``nearest``, ``reliable``, ``local-linear``, and the paper's Gaussian
+interpolation of several neighbours' actions for reference; and ``local-linear`` without its
+held-out step check, without its step at all, and with fits of any size ranking candidates
+(``local_rank_min_casts`` 0, as before it existed) or only fits of at least 3 or 10 casts),
+on the arm's VALIDATION goals (the benchmark goals stay untouched by choices), and each chosen
+action is cast on the noise-free arm, so the figure is the inverse model's own error on that
+memory, free of cast noise.
 
 Printed per arm: the mean error of each model over the seeds, and in how many runs each is no
 worse than the plain nearest neighbour on the same memory.
 
-Run:  .venv/bin/python benchmarks/bench_inverse.py                  (3 seeds x 3000, ~5 min)
+Run:  .venv/bin/python benchmarks/bench_inverse.py                  (3 seeds x 3000, ~2 min)
       .venv/bin/python benchmarks/bench_inverse.py --seeds 5 --movements 5000
+      .venv/bin/python benchmarks/bench_inverse.py --learner random --seeds 10 --movements 5000
 """
 
 from __future__ import annotations
@@ -49,10 +52,18 @@ def interpolated(memory: Memory, goal: np.ndarray, k: int = 5) -> np.ndarray:
     return (memory.actions[np.asarray(rows)] * weights[:, None]).sum(0) / weights.sum()
 
 
-def one_run(job: tuple[str, int, int]) -> dict:
-    name, seed, movements = job
+VARIANTS = {"unchecked": {"local_step_check": "none"},
+            "no-step": {"local_step_fraction": 1e-12},
+            "thin-ranking": {"local_rank_min_casts": 0.0},
+            "rank-3": {"local_rank_min_casts": 3.0},
+            "rank-10": {"local_rank_min_casts": 10.0}}
+"""local-linear with one LearnerConfig field changed from the default."""
+
+
+def one_run(job: tuple[str, str, int, int]) -> dict:
+    name, learner_name, seed, movements = job
     world = build_world(name, seed)
-    learner = make_learner("saggriac", world.env.action_dim, world.env.outcome_dim, seed,
+    learner = make_learner(learner_name, world.env.action_dim, world.env.outcome_dim, seed,
                            LearnerConfig(), world.scale)
     run(learner, world, movements, movements, seed, lambda record: None)
     _, goals = goals_for(name, "validation")
@@ -64,10 +75,8 @@ def one_run(job: tuple[str, int, int]) -> dict:
             else InverseModel(learner.memory, "nearest")
         errors[method] = float(np.mean([np.linalg.norm(arm.forward(model(g)) - g)
                                         for g in goals]))
-    variants = {"unchecked": LearnerConfig(local_step_check="none"),
-                "no-step": LearnerConfig(local_step_fraction=1e-12)}
-    for label, config in variants.items():
-        model = inverse_model_for(learner.memory, config, world.scale)
+    for label, change in VARIANTS.items():
+        model = inverse_model_for(learner.memory, LearnerConfig(**change), world.scale)
         errors[label] = float(np.mean([np.linalg.norm(arm.forward(model(g)) - g)
                                        for g in goals]))
     errors["interpolation"] = float(np.mean(
@@ -79,6 +88,9 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--worlds", nargs="+", choices=list(ARMS), default=list(ARMS))
+    p.add_argument("--learner", default="saggriac",
+                   choices=("random", "random-goals", "saggriac", "sgim-d"),
+                   help="whose memories (default saggriac; random: motor babbling's)")
     p.add_argument("--seeds", type=int, default=3)
     p.add_argument("--movements", type=int, default=3000)
     p.add_argument("--jobs", type=int, default=2)
@@ -86,11 +98,12 @@ def main(argv: list[str] | None = None) -> int:
     if args.seeds < 1 or args.movements < 1:
         p.error("--seeds and --movements must be >= 1")
     t0 = time.perf_counter()
-    jobs = [(w, s, args.movements) for w in args.worlds for s in range(args.seeds)]
+    jobs = [(w, args.learner, s, args.movements) for w in args.worlds
+            for s in range(args.seeds)]
     with ProcessPoolExecutor(args.jobs) as pool:
         results = list(pool.map(one_run, jobs))
-    methods = [*INVERSE_MODELS, "unchecked", "no-step", "interpolation"]
-    print(f"inverse models on the same SAGG-RIAC memories ({args.movements} movements), "
+    methods = [*INVERSE_MODELS, *VARIANTS, "interpolation"]
+    print(f"inverse models on the same {args.learner} memories ({args.movements} movements), "
           "validation goals, noise-free casts")
     for name in args.worlds:
         rows = [r for r in results if r["world"] == name]
