@@ -317,6 +317,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--learners", nargs="+", choices=(*LEARNERS, ORACLE), default=list(LEARNERS),
                    help=f"{ORACLE} is a diagnostic: random goals redrawn until reachable")
     p.add_argument("--seeds", type=int, default=10)
+    p.add_argument("--first-seed", type=int, default=0,
+                   help="seeds first-seed .. first-seed + seeds - 1 (more seeds of a "
+                   "comparison without running the first ones again)")
     p.add_argument("--movements", type=int, default=5000)
     p.add_argument("--eval-every", type=int, default=250)
     p.add_argument("--goals", choices=("benchmark", "validation"), default="benchmark")
@@ -329,13 +332,16 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--figure", type=Path, help="write the error curves to this PNG")
     p.add_argument("--json", type=Path, help="write every run's numbers to this file")
     args = p.parse_args(argv)
+    if args.seeds < 1 or args.first_seed < 0 or args.movements < 1 or args.jobs < 1:
+        p.error("--seeds, --movements and --jobs must be >= 1, --first-seed >= 0")
     overrides = parse_set(args.set)
     t0 = time.perf_counter()
     floors = {}
     for name in args.worlds:
         floors[name], _ = floor(name, args.goals)
     jobs = [(w, lr, s, args.movements, args.eval_every, args.goals, overrides, args.teacher_rule)
-            for w in args.worlds for lr in args.learners for s in range(args.seeds)]
+            for w in args.worlds for lr in args.learners
+            for s in range(args.first_seed, args.first_seed + args.seeds)]
     print(f"{len(jobs)} runs on {args.jobs} processes, goals: {args.goals}, overrides: "
           f"{overrides or 'none'}, teacher rule: {args.teacher_rule}", file=sys.stderr)
     with ProcessPoolExecutor(args.jobs, initializer=_init, initargs=(args.worlds,)) as pool:

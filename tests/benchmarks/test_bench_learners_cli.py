@@ -1,0 +1,27 @@
+"""bench_learners.py's command line: the seeds it runs and its refusals of bad input."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+
+from tests.conftest import PYTHON, REPO
+
+SCRIPT = str(REPO / "benchmarks" / "bench_learners.py")
+
+
+def test_first_seed_runs_the_seeds_after_it(tmp_path):
+    out = tmp_path / "runs.json"
+    subprocess.run([PYTHON, SCRIPT, "--worlds", "arm-7", "--learners", "random", "--seeds", "2",
+                    "--first-seed", "3", "--movements", "60", "--eval-every", "30",
+                    "--goals", "validation", "--jobs", "1", "--json", str(out)],
+                   check=True, capture_output=True, timeout=300)
+    runs = json.loads(out.read_text())["runs"]
+    assert sorted(r["seed"] for r in runs) == [3, 4]
+
+
+def test_bad_counts_are_refused_with_a_message():
+    for argv in (["--seeds", "0"], ["--first-seed", "-1"], ["--jobs", "0"]):
+        done = subprocess.run([PYTHON, SCRIPT, *argv], capture_output=True, text=True,
+                              timeout=60)
+        assert done.returncode == 2 and "must be >= 1" in done.stderr, argv
