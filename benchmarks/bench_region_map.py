@@ -19,7 +19,7 @@ from builtin_interfaces.msg import Time
 from rclpy.serialization import deserialize_message, serialize_message
 
 from sgim_msgs.msg import RegionMap
-from sgim_nodes.bag.validation import Limits, check
+from sgim_nodes.bag.record_checks import Limits, check
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.goal_selection import GoalSelector
 from sgim_nodes.core.learners import region_tree_for

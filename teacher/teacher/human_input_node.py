@@ -51,7 +51,8 @@ from rclpy.task import Future
 
 from sgim_msgs.msg import Demonstration, Evaluation, Movement, PaceState, RunStatus
 from sgim_msgs.srv import ExecuteAction, Pace
-from sgim_nodes.bag.validation import Limits, LiveGate
+from sgim_nodes.bag.record_checks import Limits
+from sgim_nodes.bag.validation import LiveGate
 from sgim_nodes.nodes.picture_feed import REACH_PARAMS, reach_tolerance
 from sgim_ros import qos
 from sgim_ros.params import Param, ParameterError, declare, positive

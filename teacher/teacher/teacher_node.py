@@ -36,8 +36,9 @@ import numpy as np
 from rclpy.node import Node
 
 from sgim_msgs.msg import Demonstration, HelpRequest, RunStatus
+from sgim_nodes.bag.record_checks import Limits
 from sgim_nodes.bag.resume import resume_point
-from sgim_nodes.bag.validation import Limits, LiveGate
+from sgim_nodes.bag.validation import LiveGate
 from sgim_nodes.core.help_request import DEFAULT_TIMING, ON_REQUEST, TIMINGS
 from sgim_nodes.core.learners import inverse_or_centre
 from sgim_nodes.core.random_streams import component_rng, world_seed

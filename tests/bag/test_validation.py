@@ -5,14 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sgim_nodes.bag.validation import (
-    IndexSequence,
-    Limits,
-    RunValidator,
-    check,
-    summarise,
-    teaching_set_size,
-)
+from sgim_nodes.bag.record_checks import Limits, check, teaching_set_size
+from sgim_nodes.bag.validation import IndexSequence, RunValidator, summarise
 from tests.bag import samples
 
 LIMITS = Limits(action_size=24, outcome_size=2, budget=300, teaching_set_size=26)

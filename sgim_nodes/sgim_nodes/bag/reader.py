@@ -35,16 +35,10 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
 from sgim_nodes.bag.mcap_recovery import RecoveryError, recover
+from sgim_nodes.bag.record_checks import LIMITS_KEY, Limits, Problem, teaching_set_size
 from sgim_nodes.bag.records import RECORD_TYPES, RunRecords, to_record
 from sgim_nodes.bag.types import TOPICS
-from sgim_nodes.bag.validation import (
-    LIMITS_KEY,
-    Limits,
-    Problem,
-    RunValidator,
-    summarise,
-    teaching_set_size,
-)
+from sgim_nodes.bag.validation import RunValidator, summarise
 from sgim_nodes.bag.writer import STAGING_PREFIX
 
 STORAGE_SUFFIXES = (".mcap", ".db3")

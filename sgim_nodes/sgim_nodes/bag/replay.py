@@ -26,9 +26,10 @@ import warnings
 from pathlib import Path
 
 from sgim_nodes.bag.reader import NotABagError, RawRecord, limits_for, read_raw
+from sgim_nodes.bag.record_checks import Problem
 from sgim_nodes.bag.schema import SchemaError, Upgrader
 from sgim_nodes.bag.types import STATE_TOPICS, TOPICS
-from sgim_nodes.bag.validation import Problem, RunValidator, summarise
+from sgim_nodes.bag.validation import RunValidator, summarise
 
 ACK_TIMEOUT = 5.0  # seconds to wait at the end for every subscriber to acknowledge
 NO_SUBSCRIBERS = 3  # exit code: the expected subscribers never matched

@@ -14,8 +14,9 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from sgim_nodes.bag.reader import NotABagError, limits_for, load_run
+from sgim_nodes.bag.record_checks import Limits
 from sgim_nodes.bag.records import RunRecords
-from sgim_nodes.bag.validation import Limits, RunValidator
+from sgim_nodes.bag.validation import RunValidator
 
 FIRST_SEGMENT = "bag"
 _RESUMED = re.compile(r"^bag\.resume(\d+)$")

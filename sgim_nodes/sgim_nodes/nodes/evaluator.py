@@ -25,8 +25,9 @@ from rclpy.node import Node
 
 from sgim_msgs.msg import Demonstration, Evaluation, Movement, RunStatus
 from sgim_nodes.bag.rebuild import rebuild_from_records
+from sgim_nodes.bag.record_checks import Limits
 from sgim_nodes.bag.resume import records_until, resume_point
-from sgim_nodes.bag.validation import Limits, LiveGate
+from sgim_nodes.bag.validation import LiveGate
 from sgim_nodes.core.evaluator import EVALUATION_SEED_OFFSET, Evaluator
 from sgim_nodes.core.inverse_model import InverseModel
 from sgim_nodes.core.learners import inverse_model_for, inverse_or_centre

@@ -25,8 +25,9 @@ from rclpy.task import Future
 
 from sgim_msgs.msg import Competence, Goal
 from sgim_msgs.srv import ChooseGoal
+from sgim_nodes.bag.record_checks import Limits
 from sgim_nodes.bag.resume import resume_point
-from sgim_nodes.bag.validation import Limits, LiveGate
+from sgim_nodes.bag.validation import LiveGate
 from sgim_nodes.core.goal_selection import GoalSelector
 from sgim_nodes.core.learners import goal_mode_probabilities, region_tree_for
 from sgim_nodes.core.live_regions import LiveRegions

@@ -20,8 +20,9 @@ from __future__ import annotations
 from sgim_msgs.action import Imitate
 from sgim_msgs.msg import Movement
 from sgim_msgs.srv import ExecuteAction
+from sgim_nodes.bag.record_checks import Limits
 from sgim_nodes.bag.resume import resume_point
-from sgim_nodes.bag.validation import Limits, LiveGate
+from sgim_nodes.bag.validation import LiveGate
 from sgim_nodes.core.environment import MovementResult
 from sgim_nodes.core.imitation import Imitation
 from sgim_nodes.core.random_streams import component_rng

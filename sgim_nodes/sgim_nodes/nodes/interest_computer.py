@@ -17,8 +17,9 @@ from __future__ import annotations
 from rclpy.node import Node
 
 from sgim_msgs.msg import Competence, RegionMap
+from sgim_nodes.bag.record_checks import Limits
 from sgim_nodes.bag.resume import resume_point
-from sgim_nodes.bag.validation import Limits, LiveGate
+from sgim_nodes.bag.validation import LiveGate
 from sgim_nodes.core.learners import region_tree_for
 from sgim_nodes.core.live_regions import LiveRegions
 from sgim_nodes.nodes.ros_glue import (

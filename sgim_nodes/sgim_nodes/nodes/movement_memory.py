@@ -19,7 +19,8 @@ from rclpy.node import Node
 from rclpy.task import Future
 
 from sgim_msgs.msg import Movement
-from sgim_nodes.bag.validation import Limits, LiveGate
+from sgim_nodes.bag.record_checks import Limits
+from sgim_nodes.bag.validation import LiveGate
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.learners import DEMONSTRATION, build_memory
 from sgim_nodes.core.memory import Memory

@@ -43,9 +43,10 @@ from rclpy.qos import HistoryPolicy, QoSProfile
 from rclpy.serialization import deserialize_message
 
 from sgim_msgs.msg import RunStatus
+from sgim_nodes.bag.record_checks import LIMITS_KEY, Limits, teaching_set_size
 from sgim_nodes.bag.run_folder import QUARANTINE_SUFFIX
 from sgim_nodes.bag.types import RECORDED_TOPICS, STATE_TOPICS, TOPICS
-from sgim_nodes.bag.validation import LIMITS_KEY, Limits, RunValidator, teaching_set_size
+from sgim_nodes.bag.validation import RunValidator
 from sgim_nodes.bag.writer import STORAGES, BagWriteError, BagWriter
 from sgim_ros import qos
 from sgim_ros.entry import run_node
@@ -197,7 +198,7 @@ class RecorderNode(Node):
         try:
             message = deserialize_message(raw, self._classes[name])
         except Exception as error:
-            from sgim_nodes.bag.validation import Problem
+            from sgim_nodes.bag.record_checks import Problem
 
             self.validator.quarantine(name, -1, Problem("undecodable", str(error)), now)
             self._log_quarantine()

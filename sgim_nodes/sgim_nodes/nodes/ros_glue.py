@@ -14,7 +14,7 @@ from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.node import Node
 
 from sgim_msgs.msg import Region, RegionMap
-from sgim_nodes.bag.validation import vector_problem
+from sgim_nodes.bag.record_checks import vector_problem
 from sgim_nodes.core.config import INVERSE_MODELS, OPTIMISERS, STEP_CHECKS, LearnerConfig
 from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS  # noqa: F401 - for nodes
 from sgim_nodes.core.learners import LEARNER_NAMES

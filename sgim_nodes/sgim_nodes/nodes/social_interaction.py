@@ -55,8 +55,9 @@ from rclpy.duration import Duration
 from sgim_msgs.action import Imitate, ReachGoal
 from sgim_msgs.msg import Competence, Demonstration, Evaluation, Movement, RunStatus
 from sgim_msgs.srv import ExecuteAction, RegisterDemonstration
+from sgim_nodes.bag.record_checks import Limits, teaching_set_size
 from sgim_nodes.bag.resume import resume_point
-from sgim_nodes.bag.validation import Limits, LiveGate, teaching_set_size
+from sgim_nodes.bag.validation import LiveGate
 from sgim_nodes.core.competence import competence
 from sgim_nodes.core.help_request import DEFAULT_TIMING, ON_REQUEST, TIMINGS
 from sgim_nodes.core.learners import GOAL_BABBLERS
