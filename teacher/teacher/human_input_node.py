@@ -61,17 +61,19 @@ from sim_bridge.data_files import load_teaching_set
 from teacher.human_commands import (
     OUTCOME_SIZE,
     CommandError,
-    ExecuteFirst,
     GoalPoint,
-    LearnerState,
     PaceRequest,
     Quit,
-    Reply,
     Send,
+    parse,
+)
+from teacher.human_decisions import (
+    ExecuteFirst,
+    LearnerState,
+    Reply,
     SendDemonstration,
     TeachingLibrary,
     executed_demonstration,
-    parse,
     prompt,
     unexecuted_demonstration,
 )

@@ -55,11 +55,10 @@ from sgim_ros.ready import serve_ready
 from sim_bridge import scaling
 from sim_bridge.data_files import load_teaching_set
 from sim_bridge.lake import is_water
-from teacher.human_commands import (
-    CommandError,
+from teacher.human_commands import CommandError, PaceRequest
+from teacher.human_decisions import (
     ExecuteFirst,
     LearnerState,
-    PaceRequest,
     SendDemonstration,
     TeachingLibrary,
     executed_demonstration,

@@ -8,25 +8,27 @@ import pytest
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.teaching import Teacher
 from teacher.human_commands import (
-    DEFAULT_TOLERANCE,
     HELP,
     CommandError,
-    ExecuteFirst,
     GoalPoint,
     Help,
-    LearnerState,
     ListGoals,
     Quit,
-    Reply,
     Send,
-    SendDemonstration,
     Status,
     Teach,
-    TeachingLibrary,
     YamlFile,
+    parse,
+)
+from teacher.human_decisions import (
+    DEFAULT_TOLERANCE,
+    ExecuteFirst,
+    LearnerState,
+    Reply,
+    SendDemonstration,
+    TeachingLibrary,
     executed_demonstration,
     load_action_file,
-    parse,
     prompt,
     unexecuted_demonstration,
 )

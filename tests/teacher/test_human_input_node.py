@@ -116,7 +116,8 @@ def test_list_teach_goal_and_bad_input_through_the_prompt(ros_processes, client,
                                                           teaching_file):
     from sgim_msgs.msg import Demonstration, Evaluation, Movement, RunStatus
     from sgim_ros import qos
-    from teacher.human_commands import GoalPoint, LearnerState, TeachingLibrary
+    from teacher.human_commands import GoalPoint
+    from teacher.human_decisions import LearnerState, TeachingLibrary
 
     demos = client.capture(Demonstration, "/demonstrations", qos.RECORDS)
     movements = client.node.create_publisher(Movement, "/movements", qos.RECORDS)

@@ -12,14 +12,8 @@ import numpy as np
 import pytest
 
 from sgim_nodes.view.picture import LivePicture
-from teacher.human_commands import (
-    CommandError,
-    ExecuteFirst,
-    LearnerState,
-    PaceRequest,
-    SendDemonstration,
-    TeachingLibrary,
-)
+from teacher.human_commands import CommandError, PaceRequest
+from teacher.human_decisions import ExecuteFirst, LearnerState, SendDemonstration, TeachingLibrary
 from teacher.web.app import WebTeacher
 from teacher.web.server import Api, Refused, TeacherServer
 

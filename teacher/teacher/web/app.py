@@ -37,17 +37,14 @@ from sgim_nodes.view.picture import (
 )
 from teacher.human_commands import (
     CommandError,
-    ExecuteFirst,
     GoalPoint,
-    LearnerState,
     PaceRequest,
-    SendDemonstration,
     Teach,
-    TeachingLibrary,
     parse_numbers,
     parse_pace,
     parse_unit,
 )
+from teacher.human_decisions import ExecuteFirst, LearnerState, SendDemonstration, TeachingLibrary
 
 LOG_LINES = 200  # kept for the page
 OFFERS_KEPT = 20
