@@ -1,7 +1,8 @@
 """ROS 2 node `human_input`: a person at a terminal takes the automatic teacher's place.
 
-The command language and every decision live in ``human_commands`` (no ROS); this node feeds
-it what the graph says and sends what it decides.
+The command language lives in ``human_commands`` and every decision in ``human_decisions``
+(no ROS); this node feeds them what the graph says and sends what they decide. The terminal
+loop and its threads are in ``prompt_loop``.
 
 Two threads, each with one job: the main thread reads lines with ``input()`` (with readline's
 line editing and history when stdin is a terminal; history in ~/.sgim_teacher_history), and
@@ -29,22 +30,16 @@ execute_timeout (see PARAMS).
 
 from __future__ import annotations
 
-import contextlib
-import os
-import queue
 import signal
 import sys
 import threading
 import time
 import zipfile
-from collections.abc import Callable
-from pathlib import Path
 from typing import TextIO
 
 import numpy as np
 import rclpy
 from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
@@ -77,6 +72,7 @@ from teacher.human_decisions import (
     prompt,
     unexecuted_demonstration,
 )
+from teacher.prompt_loop import PipeLines, run, setup_readline
 
 PARAMS = (
     *REACH_PARAMS,
@@ -88,7 +84,6 @@ PARAMS = (
 )
 PACE_COMMANDS = {"pause": Pace.Request.PAUSE, "resume": Pace.Request.RESUME,
                  "step": Pace.Request.STEP}
-HISTORY = Path(os.environ.get("SGIM_TEACHER_HISTORY", "~/.sgim_teacher_history")).expanduser()
 
 
 class HumanInputNode(Node):
@@ -343,118 +338,6 @@ class HumanInputNode(Node):
                                                   r.message))
         except CommandError as error:
             self.say(f"error: {error}")
-
-
-class Spinner(threading.Thread):
-    """Spins the node until stopped; wakes the reading thread when the node is finished."""
-
-    def __init__(self, node: HumanInputNode) -> None:
-        super().__init__(name="human-input-ros", daemon=False)
-        self.node = node
-        self.stopping = threading.Event()
-        self.executor = SingleThreadedExecutor(context=node.context)
-        self.executor.add_node(node)
-
-    def run(self) -> None:
-        try:
-            while not self.stopping.is_set() and self.node.context.ok():
-                self.executor.spin_once(timeout_sec=0.05)
-                self.node.poll()
-                if self.node.finished and not self.stopping.is_set():
-                    self.stopping.set()
-                    if self.node.at_prompt:  # leave input() in the main thread
-                        os.kill(os.getpid(), signal.SIGINT)
-        except ExternalShutdownException:
-            pass
-        finally:
-            with contextlib.suppress(Exception):
-                self.executor.remove_node(self.node)
-            self.executor.shutdown()
-
-    def stop(self) -> None:
-        self.stopping.set()
-        self.join(timeout=5)
-
-
-def setup_readline() -> None:
-    """Line editing and a history kept across sessions, for a person at a terminal."""
-    import atexit
-    import readline
-
-    with contextlib.suppress(OSError):
-        readline.read_history_file(HISTORY)
-    readline.set_history_length(1000)
-    atexit.register(lambda: _save_history(readline))
-
-
-def _save_history(readline) -> None:
-    with contextlib.suppress(OSError):
-        readline.write_history_file(HISTORY)
-
-
-class PipeLines:
-    """The lines of a stdin that is not a terminal, read by a daemon thread.
-
-    A SIGINT that lands after `input()` wrote its prompt but before its read() blocks is
-    handled (Python's flag is set) without interrupting that read, which then waits for the
-    next line for ever: Ctrl-C, and the spinner's wake-up at the run's end, were lost (seen
-    under load). Here the main thread waits on a queue in short steps, between which Python
-    raises a pending KeyboardInterrupt. A terminal keeps input() and readline's editing."""
-
-    def __init__(self, stream: TextIO, out: TextIO) -> None:
-        self.out = out
-        self.lines: queue.Queue[str | None] = queue.Queue()
-        threading.Thread(target=self._pump, args=(stream,), name="human-input-stdin",
-                         daemon=True).start()
-
-    def _pump(self, stream: TextIO) -> None:
-        for line in stream:
-            self.lines.put(line.rstrip("\n"))
-        self.lines.put(None)  # end of input
-
-    def input(self, text: str) -> str:
-        self.out.write(text)
-        self.out.flush()
-        while True:
-            try:
-                line = self.lines.get(timeout=0.1)
-            except queue.Empty:
-                continue
-            if line is None:
-                self.lines.put(None)  # every later read sees the end too
-                raise EOFError
-            return line
-
-
-def run(node: HumanInputNode, read_line: Callable[[str], str] = input) -> str:
-    """Read and obey lines until quit, end of input or the run's end; returns why it ended."""
-    spinner = Spinner(node)
-    spinner.start()
-    try:
-        while not node.finished:
-            with node.lock:
-                text = node.prompt_text()
-                node.at_prompt = True
-            try:
-                line = read_line(text)
-            except EOFError:
-                node.at_prompt = False
-                node.end_of_input()
-                return "end of input"
-            node.at_prompt = False
-            with node.lock:
-                node.handle_line(line)
-            while node.busy and not node.finished:
-                time.sleep(0.02)
-        return "finished"
-    except KeyboardInterrupt:
-        node.at_prompt = False
-        if node.finished:  # woken by the spinner: the run is over, already said
-            print(file=node.out)
-            return "run over"
-        raise
-    finally:
-        spinner.stop()
 
 
 def _interrupt(*_: object) -> None:

@@ -349,7 +349,7 @@ except KeyboardInterrupt:
 
 
 @pytest.mark.parametrize(("reader", "interrupted"), [
-    ("from teacher.human_input_node import PipeLines\n"
+    ("from teacher.prompt_loop import PipeLines\n"
      "read = PipeLines(os.fdopen(os.pipe()[0]), sys.stdout).input", True),
     # The control: input() blocked in read() never sees an interrupt that is flagged but does
     # not interrupt the read (what a SIGINT landing just before the read did).
