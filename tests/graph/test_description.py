@@ -27,7 +27,7 @@ def _launch_module():
 
 
 def _args(*argv):
-    from sgim_nodes.graph.experiment import parse_args
+    from sgim_nodes.graph.experiment_options import parse_args
 
     return parse_args(list(argv))
 
@@ -304,7 +304,7 @@ def test_a_timeout_must_be_a_positive_number_of_seconds(argv, capsys):
 
 
 def test_the_default_timeout_is_bounded_and_grows_with_the_budget():
-    from sgim_nodes.graph.experiment import default_timeout
+    from sgim_nodes.graph.experiment_options import default_timeout
 
     assert _args("random").timeout is None  # then default_timeout(movements)
     assert 600 < default_timeout(1000) < default_timeout(5000) < 4 * 3600

@@ -7,7 +7,7 @@ import re
 import pytest
 import yaml
 
-from sgim_nodes.graph import batch, experiment
+from sgim_nodes.graph import batch, experiment_options
 from sgim_nodes.graph.description import check
 from sgim_nodes.graph.overrides import parse_assignments
 from sgim_nodes.sweep import sweep_file
@@ -22,7 +22,7 @@ def _names(document: dict) -> list[str]:
 
 
 def test_defaults_are_run_experiments_own():
-    args = experiment.parse_args(["sgim-d"])
+    args = experiment_options.parse_args(["sgim-d"])
     expected = {"period": args.period, "movements": args.movements,
                 "eval_every": args.eval_every, "teacher": args.teacher, "storage": args.storage}
     assert expected == sweep_file.DEFAULTS
@@ -53,7 +53,7 @@ def test_period_maps_to_run_experiments_option_and_params_pass_through():
                      "wait_for_evaluation=false"]
     # run_experiment reads each value back with YAML: the very values of the file, which are
     # what its metadata.yaml will record
-    parsed = experiment.parse_args(argv)
+    parsed = experiment_options.parse_args(argv)
     assert parsed.period == 50
     assigned, _ = parse_assignments(parsed.param)
     assert check(assigned) == {"competence_reference": "fixed", "explore_gain": 2.5,

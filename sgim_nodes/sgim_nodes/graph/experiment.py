@@ -23,11 +23,8 @@ folder), 128+N stopped by signal N (130: Ctrl-C).
 from __future__ import annotations
 
 import argparse
-import ipaddress
-import math
 import os
 import platform
-import secrets
 import shlex
 import signal
 import subprocess
@@ -40,13 +37,10 @@ from typing import Any
 import yaml
 
 from sgim_nodes.core.config import recorded_learner
-from sgim_nodes.core.learners import LEARNER_NAMES
 from sgim_nodes.graph import supervise
 from sgim_nodes.graph.description import (
     ARBITER,
     RECORDER,
-    STORAGES,
-    TEACHERS,
     NodeSpec,
     RunOptions,
     RunParameters,
@@ -57,6 +51,7 @@ from sgim_nodes.graph.description import (
     unused,
 )
 from sgim_nodes.graph.domain import isolated_ros_environment, reserve_domain
+from sgim_nodes.graph.experiment_options import REPO, default_timeout, parse_args
 from sgim_nodes.graph.overrides import parse_assignments, read_parameter_files
 from sgim_nodes.graph.processes import ProcessGroup
 from sgim_nodes.graph.run_folder import (
@@ -72,50 +67,7 @@ from sgim_nodes.graph.run_folder import (
 from sgim_nodes.graph.supervise import Interrupted, RunFailed, say
 from sgim_ros.params import ParameterError
 
-REPO = Path(__file__).resolve().parents[3]
 ROS2RUN = REPO / "ros_ws" / "ros2run.sh"
-DEFAULTS = {"seed": 0, "movements": 5000, "eval_every": 250, "period": 150,
-            "teacher": "automatic", "storage": "mcap", "wait_for_teacher": 0.0,
-            "web_port": 8765, "web_host": "127.0.0.1", "web_token": "", "no_markers": False}
-# Options a resumed run takes from its folder: giving one with --resume is refused.
-RUN_OPTIONS = ("seed", "movements", "eval_every", "period", "teacher", "storage", "name",
-               "param", "params_file", "wait_for_teacher", "web_port", "web_host",
-               "web_token", "no_markers")
-FOREVER = ("forever", "inf", "-1")  # --wait-for-teacher values that mean "until it acts"
-WEB_TOKEN_MIN = 16  # the web teacher's own minimum (teacher.web.server.MIN_TOKEN)
-HUMAN_TIMEOUT = 24 * 3600.0  # a person teaches at a person's pace
-
-
-def default_timeout(movements: int, teacher: str = "automatic") -> float:
-    """Generous: a 5000-movement run takes about 2 minutes on 2 free cores; this allows 25
-    times that, and bounds a run whose every inner wait somehow failed to. A run taught by a
-    person may wait for them (--wait-for-teacher, pause): a day."""
-    if teacher in ("human", "web"):
-        return HUMAN_TIMEOUT
-    return 600.0 + 0.5 * movements
-
-
-def is_loopback(host: str) -> bool:
-    """Whether the web teacher would serve this machine only (no token needed)."""
-    try:
-        return host == "localhost" or ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
-
-
-def wait_seconds(text: str) -> float:
-    """--wait-for-teacher: seconds >= 0, or forever (the arbiter's -1)."""
-    if text.strip().lower() in FOREVER:
-        return -1.0
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected seconds or 'forever', got {text!r}") from None
-    if not value >= 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected seconds >= 0 or 'forever', got {text!r}")
-    return value
-
-
 def versions() -> dict[str, str]:
     from importlib import metadata
 
@@ -132,104 +84,6 @@ def versions() -> dict[str, str]:
     except (OSError, subprocess.SubprocessError):
         found["git_commit"] = "unknown"
     return found
-
-
-def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(
-        prog="ros_ws/run_experiment.sh",
-        description="Run one learner through the ROS 2 node graph and record the run to a bag "
-                    "in runs/. Example: ros_ws/run_experiment.sh sgim-d --seed 3 "
-                    "--movements 5000. Exit codes: 0 finished, 1 failed, 2 refused, "
-                    "130 Ctrl-C.")
-    p.add_argument("learner", choices=LEARNER_NAMES, nargs="?",
-                   help="which learner to run (not with --resume)")
-    p.add_argument("--resume", type=Path, metavar="RUN_DIR",
-                   help="resume an interrupted or failed run from its recordings, to its "
-                        "movement budget; the new recording goes beside the old ones "
-                        "(bag.resumeN). The run keeps its own options and parameters")
-    p.add_argument("--seed", type=int, help="seed of the run (default: 0)")
-    p.add_argument("--movements", type=int,
-                   help="movement budget; the paper's is 5000 (default: 5000)")
-    p.add_argument("--eval-every", type=int,
-                   help="movements between evaluations; paper 250 (default: 250)")
-    p.add_argument("--period", type=int,
-                   help="movements between demonstrations; paper 150 (default: 150)")
-    p.add_argument("--teacher", choices=TEACHERS,
-                   help="automatic (default): the teacher node, every --period movements; "
-                        "human: you, at the human_input prompt in this terminal; web: you, on "
-                        "the web_teacher page (its address is printed); external: no teacher "
-                        "node, demonstrations come from any other publisher at any time")
-    p.add_argument("--wait-for-teacher", type=wait_seconds, metavar="SECONDS",
-                   help="human or web teacher: stop every --period movements and wait this "
-                        "long for a demonstration (0: never wait; 'forever': until the "
-                        "teacher demonstrates or resumes). Default: 0")
-    p.add_argument("--web-port", type=int,
-                   help="web teacher: the page's port (0: any free one; default 8765)")
-    p.add_argument("--web-host",
-                   help="web teacher: the interface to serve on (default: 127.0.0.1, this "
-                        "machine only; another one needs an access token, generated unless "
-                        "--web-token)")
-    p.add_argument("--web-token",
-                   help="web teacher: the access token the page's address must carry")
-    p.add_argument("--no-markers", action="store_const", const=True,
-                   help="do not start the markers node (MarkerArray topics for rviz2 and "
-                        "Foxglove, recorded in the bag)")
-    p.add_argument("--runs-dir", type=Path, default=REPO / "runs",
-                   help="where the run folder is made (default: runs/)")
-    p.add_argument("--name", help="run folder name (default: <learner>-seed<N>-<time>)")
-    p.add_argument("--storage", choices=STORAGES, help="bag storage (default: mcap)")
-    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
-                   help="set a node parameter, e.g. --param goal_budget=20 (VALUE is YAML); "
-                        "the social modes too: timing=on-request, demonstration_content="
-                        "goal-only or means-only, teacher_choice=farthest-unreached; a name no "
-                        "node declares, or a mode the learner cannot play, stops the run before "
-                        "it starts")
-    p.add_argument("--params-file", action="append", default=[], type=Path, metavar="FILE",
-                   help="a ROS parameter file: sections /** (every node) or a node's name, "
-                        "each holding ros__parameters; checked like --param, which wins")
-    p.add_argument("--prefix", action="append", default=[], metavar="NODE=COMMAND",
-                   help="start NODE under COMMAND, as a launch file's prefix does (e.g. "
-                        "--prefix 'sim_bridge=valgrind', --prefix 'recorder=prlimit "
-                        "--fsize=1000000')")
-    p.add_argument("--domain", type=int, default=None,
-                   help="use this ROS_DOMAIN_ID as it is, e.g. to join a graph from a test "
-                        "(default: reserve a free one)")
-    p.add_argument("--timeout", type=float, default=None,
-                   help="fail the run after this many seconds (> 0; default: 600 + 0.5 per "
-                        "movement, 3100 s for 5000 movements; a day with a human or web "
-                        "teacher)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
-    args = p.parse_args(argv)
-    if (args.learner is None) == (args.resume is None):
-        p.error("give a learner, or --resume RUN_DIR (not both)")
-    if args.resume is not None:
-        given = [f"--{name.replace('_', '-')}" for name in RUN_OPTIONS
-                 if getattr(args, name) not in (None, [])]
-        if given:
-            p.error(f"{', '.join(given)} cannot be given with --resume: a resumed run keeps "
-                    "the options and parameters it was started with")
-    for name, value in DEFAULTS.items():
-        if getattr(args, name) is None:
-            setattr(args, name, value)
-    for name in ("movements", "period"):
-        if getattr(args, name) < 1:
-            p.error(f"--{name} must be >= 1")
-    if args.seed < 0 or args.eval_every < 0:
-        p.error("--seed and --eval-every must be >= 0")
-    if args.timeout is not None and not (args.timeout > 0 and math.isfinite(args.timeout)):
-        p.error(f"--timeout must be a number of seconds > 0, got {args.timeout:g}")
-    if args.domain is not None and not 0 <= args.domain <= 232:
-        p.error(f"--domain must be in 0..232, got {args.domain}")
-    if not 0 <= args.web_port <= 65535:
-        p.error("--web-port must be in 0..65535")
-    if args.teacher == "web":
-        if not is_loopback(args.web_host) and not args.web_token:
-            args.web_token = secrets.token_urlsafe(18)
-        if args.web_token and len(args.web_token) < WEB_TOKEN_MIN:
-            p.error(f"--web-token must have at least {WEB_TOKEN_MIN} characters")
-    if args.wait_for_teacher and args.teacher not in ("human", "web"):
-        p.error("--wait-for-teacher needs a human teacher (--teacher human or web)")
-    return args
 
 
 def prefixes(items: Sequence[str], nodes: Sequence[NodeSpec]) -> dict[str, list[str]]:

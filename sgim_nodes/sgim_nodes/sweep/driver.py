@@ -28,7 +28,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from sgim_nodes.graph.experiment import default_timeout
+from sgim_nodes.graph.experiment_options import default_timeout
 from sgim_nodes.sweep import results
 from sgim_nodes.sweep.results import State
 from sgim_nodes.sweep.sweep_file import RunSpec, Sweep, SweepFileError, load

@@ -37,7 +37,7 @@ from typing import Any
 import yaml
 
 from sgim_nodes.core.learners import LEARNER_NAMES
-from sgim_nodes.graph import experiment
+from sgim_nodes.graph import experiment_options
 from sgim_nodes.graph.description import (
     ARBITER_TEACHER,
     OPTION_PARAMETERS,
@@ -50,7 +50,7 @@ from sgim_nodes.graph.description import (
     social_mode_problems,
     unused,
 )
-from sgim_nodes.graph.experiment import REPO
+from sgim_nodes.graph.experiment_options import REPO
 from sgim_ros.params import ParameterError
 
 # Settings of one run: the file's keys (param: -> run_experiment --param NAME=VALUE).
@@ -63,7 +63,7 @@ SETTING_OF_PARAM = {"learner": "learner", "seed": "seeds", "movements": "movemen
                     "eval_every": "eval_every", "demonstration_period": "period",
                     "teacher": "teacher", "storage": "storage"}
 # run_experiment's own defaults.
-DEFAULTS = {key: experiment.DEFAULTS[key]
+DEFAULTS = {key: experiment_options.DEFAULTS[key]
             for key in ("period", "movements", "eval_every", "teacher", "storage")}
 _UNSAFE = re.compile(r"[^A-Za-z0-9._+=,-]+")
 

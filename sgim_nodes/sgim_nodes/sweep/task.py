@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from sgim_nodes.graph.batch import PROGRESS
-from sgim_nodes.graph.experiment import REPO
+from sgim_nodes.graph.experiment_options import REPO
 from sgim_nodes.graph.processes import ProcessGroup
 from sgim_nodes.sweep.results import read_yaml
 from sgim_nodes.sweep.sweep_file import RunSpec
