@@ -11,8 +11,8 @@ that pair's own action), tells the ranking's share of the gap from the step's, a
 ours without the gate on the fits it steps along (``local_min_casts`` 0), the gate's share,
 and a fifth, ours without the held-out check of its step (``local_step_check: none``).
 ``--goals validation`` (fishing) compares them on other points of the benchmark's grid cells
-(sim_bridge.tools.make_benchmark_set with seed 7), so that a choice made here is not made on
-the benchmark's own goals.
+(its tool's ``validation_goals``, seed 7), so that a choice made here is not made on the
+benchmark's own goals.
 ``--learn-set NAME=VALUE`` changes the learning run's LearnerConfig (e.g. local_min_casts=0 to
 learn the memory the way the learner did before the gate).
 
@@ -47,9 +47,9 @@ def validation_goals(world: str) -> np.ndarray:
     if world != "fishing":
         raise SystemExit("--goals validation: the fishing world only (the arms: bench_inverse)")
     from sim_bridge.data_files import load_reachable_map
-    from sim_bridge.tools.make_benchmark_set import benchmark_goals
+    from sim_bridge.tools.make_benchmark_set import validation_goals as other_points
 
-    return benchmark_goals(load_reachable_map(), 7)
+    return other_points(load_reachable_map())
 
 
 def main() -> int:

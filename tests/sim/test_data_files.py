@@ -23,7 +23,13 @@ from sim_bridge.data_files import (
 from sim_bridge.fishing_world import FishingWorld, Status
 from sim_bridge.lake import is_water
 from sim_bridge.tools import make_floor, make_teaching_set
-from sim_bridge.tools.make_benchmark_set import benchmark_goals, on_reached_water
+from sim_bridge.tools.make_benchmark_set import (
+    GRID,
+    benchmark_goals,
+    grid_cells,
+    on_reached_water,
+    validation_goals,
+)
 from sim_bridge.tools.map_reachable import run_mapping
 
 
@@ -77,6 +83,23 @@ def test_benchmark_set_regenerates_exactly_from_the_map(casts) -> None:
     stored = _stored(BENCHMARK_GOALS)
     regenerated = benchmark_goals(casts.outcomes, int(stored["seed"]))
     assert regenerated.tobytes() == stored["goals"].tobytes()
+
+
+def test_validation_goals_are_other_points_of_the_benchmarks_cells(casts) -> None:
+    """Fishing's validation goals (choices are judged on them, never on the benchmark): one in
+    each cell the benchmark samples, on reached water too, and none of them a benchmark goal."""
+    reached = casts.outcomes.astype(float)
+    goals, validation = load_benchmark_goals(), validation_goals(reached)
+    lo, size, _ = grid_cells(reached)
+
+    def cells(points: np.ndarray) -> list[tuple[int, int]]:
+        index = np.minimum(np.floor((points - lo) / size).astype(int), np.array(GRID) - 1)
+        return [tuple(c) for c in index.tolist()]
+
+    assert validation.shape == goals.shape
+    assert np.all(on_reached_water(validation, reached))
+    assert sorted(cells(validation)) == sorted(cells(goals))
+    assert np.min(np.linalg.norm(validation[:, None] - goals[None], axis=2)) > 0
 
 
 def test_teaching_set_within_bounds_on_reached_water(casts) -> None:

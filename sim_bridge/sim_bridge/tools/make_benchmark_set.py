@@ -32,6 +32,9 @@ GRID = (26, 16)
 # and the typical gap between neighbouring mapped landings in the sparsest reached cells.
 REACH_RADIUS = 0.03
 MAX_TRIES = 10_000
+VALIDATION_SEED = 7
+"""Seed of the validation goals: other points of the same cells, on which a choice is judged
+so that it is never made on the benchmark's own goals (the arms use seed 7 likewise)."""
 
 
 def grid_cells(points: np.ndarray, grid: tuple[int, int] = GRID
@@ -73,6 +76,12 @@ def benchmark_goals(reached: np.ndarray, seed: int, grid: tuple[int, int] = GRID
             g = members[rng.integers(len(members))]
         goals.append(g)
     return np.array(goals)
+
+
+def validation_goals(reached: np.ndarray, lake: Lake = DEFAULT_LAKE) -> np.ndarray:
+    """The benchmark's cells, other points in them (``VALIDATION_SEED``); not stored: a pure
+    function of the map, like the benchmark itself."""
+    return benchmark_goals(reached, VALIDATION_SEED, lake=lake)
 
 
 def main(argv: list[str] | None = None) -> None:
