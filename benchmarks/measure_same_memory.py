@@ -8,7 +8,8 @@ does), to see how often the 2-cast verdict flips and how large the gap is agains
 spread. The actions of both models are computed once: only the casts' noise differs between
 repeats. A third model, ours without its local-linear step (the candidate it ranks best,
 that pair's own action), tells the ranking's share of the gap from the step's, a fourth,
-ours without the gate on the fits it steps along (``local_min_casts`` 0), the gate's share,
+ours without the gates on thin fits (``local_min_casts`` and ``local_rank_min_casts`` 0),
+the gates' share,
 and a fifth, ours without the held-out check of its step (``local_step_check: none``).
 ``--goals validation`` (fishing) compares them on other points of the benchmark's grid cells
 (its tool's ``validation_goals``, seed 7), so that a choice made here is not made on the
@@ -73,7 +74,8 @@ def main() -> int:
     ours = inverse_model_for(learner.memory, LearnerConfig(), world.scale)  # the default model
     # ours without its local-linear step: the candidate it ranks best, that pair's own action
     unmoved = InverseModel(learner.memory, "local-linear", ours.l_max, ours.k_max, ours.alpha,
-                           ours.local_radius, ours.local_neighbours, 1e-12)
+                           ours.local_radius, ours.local_neighbours, 1e-12, ours.min_casts,
+                           ours.noise_rms, ours.rank_min_casts)
     ungated = InverseModel(learner.memory, "local-linear", ours.l_max, ours.k_max, ours.alpha,
                            ours.local_radius, ours.local_neighbours, ours.local_step, 0.0,
                            ours.noise_rms)
