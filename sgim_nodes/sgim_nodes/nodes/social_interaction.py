@@ -59,11 +59,12 @@ from sgim_nodes.bag.record_checks import Limits, teaching_set_size
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.bag.validation import LiveGate
 from sgim_nodes.core.competence import competence
-from sgim_nodes.core.help_request import DEFAULT_TIMING, ON_REQUEST, TIMINGS
+from sgim_nodes.core.help_request import ON_REQUEST
 from sgim_nodes.core.learners import GOAL_BABBLERS
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.core.teaching import GOAL_ONLY, MEANS_ONLY
 from sgim_nodes.nodes.arbiter_jobs import JobSlot, Waits
+from sgim_nodes.nodes.arbiter_params import PARAMS, SOCIAL
 from sgim_nodes.nodes.demonstration_inbox import DemonstrationInbox, shown
 from sgim_nodes.nodes.graph_startup import (
     ExpectedGraph,
@@ -73,57 +74,19 @@ from sgim_nodes.nodes.graph_startup import (
     wait_for_graph,
 )
 from sgim_nodes.nodes.help_asks import HelpAsks
-from sgim_nodes.nodes.pace import FOREVER, PaceControl
+from sgim_nodes.nodes.pace import PaceControl
 from sgim_nodes.nodes.ros_glue import (
     AsyncNode,
     declare_learner,
     floats,
-    learner_node_params,
     run_node,
     vec,
     world_scale,
 )
 from sgim_nodes.nodes.run_progress import RunProgress
-from sgim_nodes.nodes.sim_client import SIM_CLIENT_PARAMS, SimClient, SimulatorError
+from sgim_nodes.nodes.sim_client import SimClient, SimulatorError
 from sgim_ros import qos
-from sgim_ros.params import Param, ParameterError, at_least, non_negative, one_of, positive
-
-SOCIAL = ("sgim-d", "demo-only")
-PARAMS = learner_node_params(
-    Param("movements", 5000, "the run's movement budget (the paper: 5000)", at_least(1)),
-    Param("teacher", "automatic", "who gives demonstrations: automatic (synchronous at its "
-          "period), human (any time), none", one_of("automatic", "human", "none")),
-    Param("demonstration_period", 150, "the automatic teacher's period P (paper: 150); "
-          "on-request, the learner earns one ask per P movements", at_least(1)),
-    Param("timing", DEFAULT_TIMING, "when the automatic teacher speaks: 'period' (every "
-          "demonstration_period movements, the paper) or 'on-request' (sgim-d asks on "
-          "help_requests when its progress stalls); the teacher's must be the same; "
-          "core/help_request.py", one_of(*TIMINGS)),
-    Param("wait_for_teacher", 0.0, "human teacher: seconds the run waits for a demonstration "
-          f"every demonstration_period movements (0: never waits, {FOREVER:g}: until the "
-          "teacher acts)", lambda v: v >= 0 or v == FOREVER, f">= 0 or {FOREVER:g}"),
-    Param("wait_for_evaluation", True, "finish only after the final evaluation"),
-    Param("wait_for_recorder", True, "start only once a recorder listens"),
-    Param("startup_timeout", 60.0, "seconds to wait for the other nodes (their servers, "
-          "publishers and the listeners' *_ready services, sgim_ros/ready.py) before the start",
-          positive),
-    Param("teacher_timeout", 60.0, "seconds to wait for the teacher at a boundary", positive,
-          read_only=False),
-    Param("call_timeout", 600.0, "seconds to wait for the answer of register_demonstration, "
-          "or for the result of a reach_goal or imitate job", positive, read_only=False),
-    Param("goals_per_job", 50, "goals one reach_goal job may attempt before it reports back "
-          "(it stops earlier at the teacher's boundary, the budget, a pause or a "
-          "demonstration): a job's length stays bounded for call_timeout and progress; 1 "
-          "sends each goal as a job of its own, as timing 'on-request' always does (the "
-          "help rule decides after each goal) and a goal-only demonstration does (its goal "
-          "is the job's only one)", at_least(1)),
-    Param("evaluation_timeout", 600.0, "seconds to wait for the final evaluation", positive,
-          read_only=False),
-    *SIM_CLIENT_PARAMS,
-    Param("settle_time", 2.0, "seconds of discovery settling before the start", non_negative),
-    Param("teaching_set", "", "the teacher's teaching-set file (empty: the packaged one), to "
-          "validate demonstrations' teaching-set indices"),
-)
+from sgim_ros.params import ParameterError
 
 
 class SocialInteraction(AsyncNode):
