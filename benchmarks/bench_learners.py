@@ -13,8 +13,9 @@ lower level and the interest (learner_probes.py): gain of goal attempts on memor
 share, real against shuffled interest, and the share of mode-1 goals in never-reachable space
 per 500-movement frame against that space's share of the box.
 
-``--goals validation`` evaluates on a second goal set (other points of the same grid cells):
-parameters are chosen there, and reported on the benchmark set, never tuned on it.
+``--goals validation`` evaluates on a second goal set (other points of the same grid cells;
+on fishing too, without a floor): parameters are chosen there, and reported on the benchmark
+set, never tuned on it.
 
 Run:  .venv/bin/python benchmarks/bench_learners.py                      (all, ~15 min on 2 cores)
       .venv/bin/python benchmarks/bench_learners.py --seeds 3 --movements 2000 --worlds arm-20
@@ -60,12 +61,14 @@ GOAL_SEEDS = {"benchmark": 0, "validation": 7}
 def goals_for(name: str, kind: str) -> tuple[np.ndarray | None, np.ndarray]:
     """(actions, goals): one reachable point per reachable cell of the arm's benchmark grid
     with the posture that reaches it exactly; ``validation`` draws other points of the cells.
-    Fishing: its packaged benchmark goals (no validation set: nothing is tuned on fishing)."""
+    Fishing: its packaged benchmark goals, or other points of their cells drawn by the same
+    tool (make_benchmark_set.validation_goals)."""
     if name == "fishing":
-        if kind != "benchmark":
-            raise SystemExit("the fishing world has no validation goals: nothing is tuned on it")
-        from sim_bridge.data_files import load_benchmark_goals
+        from sim_bridge.data_files import load_benchmark_goals, load_reachable_map
+        from sim_bridge.tools.make_benchmark_set import validation_goals
 
+        if kind == "validation":
+            return None, np.asarray(validation_goals(load_reachable_map()), float)
         return None, np.asarray(load_benchmark_goals(), float)
     spec = ARMS[name]
     return reach_of(spec.make(0, noise=0.0), spec.cells, GOAL_SEEDS[kind]).reached_points()
@@ -92,8 +95,11 @@ def floor(name: str, kind: str, casts: int = 100) -> tuple[float, np.ndarray]:
     """Per goal: the posture that reaches it exactly on the noise-free arm, cast ``casts`` times
     with the arm's noise; the mean distance (for Gaussian noise, about 1.25 sigma). Fishing: the
     floor shipped with its benchmark set (a nearest-action lookup on a dense map of the world,
-    cast with noise; sim_bridge.data_files.load_floor), NaN if the data has none."""
+    cast with noise; sim_bridge.data_files.load_floor), NaN if the data has none or for the
+    validation goals (no floor is shipped for them)."""
     if name == "fishing":
+        if kind != "benchmark":
+            return float("nan"), np.empty(0)
         try:
             from sim_bridge.data_files import load_floor
         except ImportError:
@@ -322,7 +328,8 @@ def main(argv: list[str] | None = None) -> int:
                    "comparison without running the first ones again)")
     p.add_argument("--movements", type=int, default=5000)
     p.add_argument("--eval-every", type=int, default=250)
-    p.add_argument("--goals", choices=("benchmark", "validation"), default="benchmark")
+    p.add_argument("--goals", choices=("benchmark", "validation"), default="benchmark",
+                   help="the benchmark goals, or other points of their cells (choose there)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a LearnerConfig value for every learner (repeatable)")
     p.add_argument("--teacher-rule", choices=REACHED_RULES, default=DEFAULT_REACHED_RULE,

@@ -20,6 +20,24 @@ def test_first_seed_runs_the_seeds_after_it(tmp_path):
     assert sorted(r["seed"] for r in runs) == [3, 4]
 
 
+def test_fishing_has_validation_goals_apart_from_its_benchmark():
+    """Fishing choices are judged on other points of the benchmark's cells, never on its goals;
+    no floor is shipped for them (NaN, not the benchmark's)."""
+    import sys
+
+    import numpy as np
+
+    sys.path.insert(0, str(REPO / "benchmarks"))
+    from bench_learners import floor, goals_for
+
+    _, benchmark = goals_for("fishing", "benchmark")
+    _, validation = goals_for("fishing", "validation")
+    assert validation.shape == benchmark.shape
+    assert np.min(np.linalg.norm(validation[:, None] - benchmark[None], axis=2)) > 0
+    assert np.isnan(floor("fishing", "validation")[0])
+    assert np.isfinite(floor("fishing", "benchmark")[0])
+
+
 def test_bad_counts_are_refused_with_a_message():
     for argv in (["--seeds", "0"], ["--first-seed", "-1"], ["--jobs", "0"]):
         done = subprocess.run([PYTHON, SCRIPT, *argv], capture_output=True, text=True,
