@@ -40,17 +40,7 @@ from sgim_nodes.core.learners import inverse_model_for, make_learner  # noqa: E4
 from sgim_nodes.core.runner import build_world, run  # noqa: E402
 
 sys.path.insert(0, str(REPO / "benchmarks"))
-from bench_learners import parse_set  # noqa: E402
-
-
-def validation_goals(world: str) -> np.ndarray:
-    """Other points of the fishing benchmark's cells: its tool, from the stored map, seed 7."""
-    if world != "fishing":
-        raise SystemExit("--goals validation: the fishing world only (the arms: bench_inverse)")
-    from sim_bridge.data_files import load_reachable_map
-    from sim_bridge.tools.make_benchmark_set import validation_goals as other_points
-
-    return other_points(load_reachable_map())
+from bench_learners import goals_for, parse_set  # noqa: E402
 
 
 def main() -> int:
@@ -66,6 +56,8 @@ def main() -> int:
     p.add_argument("--learn-set", action="append", default=[], metavar="NAME=VALUE",
                    help="a LearnerConfig value for the learning run (repeatable)")
     a = p.parse_args()
+    if a.goals == "validation" and a.world != "fishing":
+        raise SystemExit("--goals validation: the fishing world only (the arms: bench_inverse)")
     start = time.perf_counter()
     world = build_world(a.world, a.seed)
     learner = make_learner(a.learner, world.env.action_dim, world.env.outcome_dim, a.seed,
@@ -83,7 +75,7 @@ def main() -> int:
                                   world.scale)
     models = {"ours": ours, "nearest": InverseModel(learner.memory, "nearest"),
               "ours-no-step": unmoved, "ours-no-gate": ungated, "ours-unchecked": unchecked}
-    goals = world.goals if a.goals == "benchmark" else validation_goals(a.world)
+    goals = world.goals if a.goals == "benchmark" else goals_for(a.world, "validation")[1]
     actions = {label: {tuple(g): np.asarray(m(g), float) for g in goals}
                for label, m in models.items()}
     same = np.mean([np.array_equal(actions["ours"][k], actions["nearest"][k])
