@@ -59,3 +59,19 @@ def test_query_time_at_10000_pairs_under_1ms():
         mem.nearest(q, 10)
         times.append(time.perf_counter() - t)
     assert np.median(times) < 1e-3
+
+
+def test_nearest_actions_break_ties_at_the_kth_by_index_whatever_the_memory_size():
+    """Repeated actions are common (an inverse answer cast again): which of several equally
+    near pairs is kept must not depend on how many pairs memory holds."""
+    rng = np.random.default_rng(4)
+    mem = Memory(3, 2)
+    repeated = np.full(3, 0.5)
+    for i in range(40):
+        mem.add(repeated if i % 4 == 0 else rng.uniform(-1, 1, 3), np.zeros(2))
+    tied = np.flatnonzero(np.all(mem.actions == repeated, axis=1))  # 10 copies
+    centre = repeated + np.array([0.1, 0.0, 0.0])
+    for extra in range(600):
+        _, idx = mem.nearest_actions(centre, 4)
+        assert list(idx) == list(tied[:4]), f"after {extra} far pairs"
+        mem.add(rng.uniform(2, 3, 3), np.zeros(2))  # far away: the answer must not change

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import local_model
+from .fit_cache import FitCache
 from .memory import Memory
 
 
@@ -82,6 +83,7 @@ class InverseModel:
         self.min_casts = min_casts
         self.noise_rms = noise_rms
         self.rank_min_casts = rank_min_casts
+        self.fits = FitCache(memory, local_radius, local_neighbours)
 
     def most_reliable(self, goal: np.ndarray) -> tuple[int, float]:
         """Memory index and score of the most reliable of the l_max candidates."""
@@ -134,7 +136,7 @@ class InverseModel:
         _, cand_i = mem.nearest(goal, self.l_max)
         best: tuple[int, float, np.ndarray, local_model.LocalFit | None] | None = None
         for i in cand_i:
-            fit = local_model.fit(mem, mem.actions[i], self.local_radius, self.local_neighbours)
+            fit = self.fits.get(i)
             if fit is not None and fit.n_effective < self.rank_min_casts:
                 fit = None  # too few casts to predict better than the stored outcome
             predicted = mem.outcomes[i] if fit is None else fit.outcome

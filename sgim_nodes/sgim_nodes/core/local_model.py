@@ -77,9 +77,11 @@ def fit(memory: Memory, centre: np.ndarray, radius: float, max_pairs: int) -> Lo
     design = np.hstack([np.ones((len(idx), 1)), x]) * sw
     spread = float((w[:, None] * x**2).sum() / w.sum())
     lam = RIDGE * max(spread, 1e-12)
-    ridge_rows = np.hstack([np.zeros((n_act, 1)), np.sqrt(lam) * np.eye(n_act)])
-    beta, *_ = np.linalg.lstsq(np.vstack([design, ridge_rows]),
-                               np.vstack([y * sw, np.zeros((n_act, y.shape[1]))]), rcond=None)
+    # The ridge-regularised normal equations: the ridge keeps the Gram matrix well conditioned
+    # (the intercept column is never zero-weighted), and a solve is a fraction of lstsq's SVD.
+    gram = design.T @ design
+    gram[np.arange(1, n_act + 1), np.arange(1, n_act + 1)] += lam
+    beta = np.linalg.solve(gram, design.T @ (y * sw))
     b, jac = beta[0], beta[1:].T
     resid = y - (b + x @ jac.T)
     rms = float(np.sqrt((w * (resid**2).sum(1)).sum() / w.sum()))

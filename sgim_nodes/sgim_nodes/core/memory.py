@@ -110,9 +110,15 @@ class Memory:
             return np.empty(0), np.empty(0, dtype=int)
         diff = self._actions[: self._n] - np.asarray(action, dtype=float)
         d2 = np.einsum("ij,ij->i", diff, diff)
-        idx = np.argpartition(d2, k - 1)[:k] if k < self._n else np.arange(self._n)
-        order = np.lexsort((idx, d2[idx]))
-        idx = idx[order]
+        if k < self._n:
+            # Every pair as close as the k-th, so that ties there go by index too: a repeated
+            # action is common (an inverse answer cast again), and argpartition alone picks
+            # among equal distances by the array's length, not by index.
+            kth = d2[np.argpartition(d2, k - 1)[k - 1]]
+            idx = np.flatnonzero(d2 <= kth)
+        else:
+            idx = np.arange(self._n)
+        idx = idx[np.lexsort((idx, d2[idx]))[:k]]
         return np.sqrt(d2[idx]), idx
 
     def closest_distance(self, point: np.ndarray) -> float:

@@ -1,0 +1,71 @@
+"""What the inverse model costs: a learner's whole run, with the fit cache and without it.
+
+The local-linear inverse model fits a linear model around each of its l_max candidates for
+every goal; core/fit_cache.py keeps each fit until a new pair lands within its radius. This
+runs the same learner, seed and world twice in the single-process runner, once with the cache
+and once with a cache of one fit (a refit almost every time), and prints both wall times, the
+cache's hit rate, and whether the two runs made the same movements (they must: the cache
+answers exactly what a refit answers).
+
+Run:  .venv/bin/python benchmarks/bench_inverse_speed.py                  (arm-20, 5000)
+      .venv/bin/python benchmarks/bench_inverse_speed.py --world arm-7 --learner saggriac
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(REPO / "sgim_nodes"), str(REPO / "sim_bridge")]
+
+from sgim_nodes.core.config import LearnerConfig  # noqa: E402
+from sgim_nodes.core.fit_cache import FitCache  # noqa: E402
+from sgim_nodes.core.learners import GOAL_BABBLERS, make_learner  # noqa: E402
+from sgim_nodes.core.planar_arm import ARMS  # noqa: E402
+from sgim_nodes.core.runner import build_world, run  # noqa: E402
+
+
+def one_run(world_name: str, learner_name: str, seed: int, movements: int,
+            capacity: int | None) -> tuple[float, np.ndarray, FitCache]:
+    world = build_world(world_name, seed)
+    learner = make_learner(learner_name, world.env.action_dim, world.env.outcome_dim, seed,
+                           LearnerConfig(), world.scale)
+    model = learner.inverse_model
+    if capacity is not None:
+        model.fits = FitCache(model.memory, model.local_radius, model.local_neighbours,
+                              capacity)
+    start = time.perf_counter()
+    run(learner, world, movements, 250, seed, lambda record: None)
+    return time.perf_counter() - start, learner.memory.actions.copy(), model.fits
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--world", default="arm-20", choices=[*ARMS, "fishing"])
+    p.add_argument("--learner", default="sgim-d", choices=GOAL_BABBLERS)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--movements", type=int, default=5000)
+    a = p.parse_args(argv)
+    if a.movements < 1:
+        p.error("--movements must be >= 1")
+    print(f"{a.learner} on {a.world}, seed {a.seed}, {a.movements} movements, "
+          "single-process runner")
+    cached_s, cached_actions, cache = one_run(a.world, a.learner, a.seed, a.movements, None)
+    asked = cache.hits + cache.misses
+    print(f"  with the fit cache:   {cached_s:7.1f} s  ({cache.hits} of {asked} fits from the "
+          f"cache, {cache.hits / max(asked, 1):.0%})")
+    fresh_s, fresh_actions, _ = one_run(a.world, a.learner, a.seed, a.movements, 1)
+    print(f"  refitting every time: {fresh_s:7.1f} s")
+    same = (cached_actions.shape == fresh_actions.shape
+            and np.array_equal(cached_actions, fresh_actions))
+    print(f"  speed-up {fresh_s / cached_s:.2f}; same movements: {same}")
+    return 0 if same else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
