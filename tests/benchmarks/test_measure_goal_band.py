@@ -1,0 +1,48 @@
+"""measure_goal_band.py: its band holds reachable space and grows with the margin, and its
+restricted learner's goals stay inside it."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+
+from tests.conftest import PYTHON, REPO
+
+sys.path.insert(0, str(REPO / "benchmarks"))
+
+
+def test_the_band_holds_reachable_space_and_grows_with_the_margin():
+    import bench_learners as bl
+    from measure_goal_band import UNRESTRICTED, band
+
+    reach = bl.reach_map("arm-20")
+    narrow, wide = band(reach, 0.05), band(reach, 0.3)
+    assert np.all(narrow.reached[reach.reached]) and np.all(wide.reached[narrow.reached])
+    assert reach.area_share > narrow.area_share > wide.area_share > 0.0
+    assert band(reach, UNRESTRICTED).area_share == 0.0
+
+
+def test_restricted_goals_stay_in_the_band():
+    import bench_learners as bl
+    from measure_goal_band import band
+
+    from sgim_nodes.core.config import LearnerConfig
+    from sgim_nodes.core.learners import make_learner
+    from sgim_nodes.core.runner import build_world
+
+    allowed = band(bl.reach_map("arm-20"), 0.05)
+    world = build_world("arm-20", 0)
+    learner = make_learner("random-goals", world.env.action_dim, world.env.outcome_dim, 0,
+                           LearnerConfig(), world.scale)
+    bl.restrict_to_reachable(learner, allowed)
+    rng = np.random.default_rng(1)
+    goals = np.array([learner.selector.sample(rng).goal for _ in range(200)])
+    assert allowed.share(goals) == 0.0
+
+
+def test_bad_margins_are_refused():
+    done = subprocess.run([PYTHON, str(REPO / "benchmarks" / "measure_goal_band.py"),
+                           "--margins", "0"], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and "margin" in done.stderr
