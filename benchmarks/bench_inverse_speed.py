@@ -27,9 +27,18 @@ sys.path[:0] = [str(REPO / "sgim_nodes"), str(REPO / "sim_bridge")]
 
 from sgim_nodes.core.config import LearnerConfig  # noqa: E402
 from sgim_nodes.core.fit_cache import FitCache  # noqa: E402
+from sgim_nodes.core.inverse_model import InverseModel  # noqa: E402
 from sgim_nodes.core.learners import GOAL_BABBLERS, build_memory, make_learner  # noqa: E402
 from sgim_nodes.core.planar_arm import ARMS  # noqa: E402
 from sgim_nodes.core.runner import build_world, run  # noqa: E402
+
+
+def with_capacity(model: InverseModel, capacity: int | None) -> None:
+    """Give ``model`` a fit cache of ``capacity`` fits (1: a refit almost every time); None
+    keeps its default cache."""
+    if capacity is not None:
+        model.fits = FitCache(model.memory, model.local_radius, model.local_neighbours,
+                              capacity)
 
 
 def one_run(world_name: str, learner_name: str, seed: int, movements: int,
@@ -38,9 +47,7 @@ def one_run(world_name: str, learner_name: str, seed: int, movements: int,
     learner = make_learner(learner_name, world.env.action_dim, world.env.outcome_dim, seed,
                            LearnerConfig(), world.scale)
     model = learner.inverse_model
-    if capacity is not None:
-        model.fits = FitCache(model.memory, model.local_radius, model.local_neighbours,
-                              capacity)
+    with_capacity(model, capacity)
     start = time.perf_counter()
     run(learner, world, movements, 250, seed, lambda record: None)
     return (time.perf_counter() - start, learner.memory.actions.copy(), model.fits,
@@ -54,8 +61,7 @@ def evaluator_cpu(world_name: str, actions: np.ndarray, outcomes: np.ndarray,
     world = build_world(world_name, 0)
     memory, model = build_memory(LearnerConfig(), actions.shape[1], outcomes.shape[1],
                                  world.scale)
-    if capacity is not None:
-        model.fits = FitCache(memory, model.local_radius, model.local_neighbours, capacity)
+    with_capacity(model, capacity)
     spent, evaluations = 0.0, 0
     for i, (a, y) in enumerate(zip(actions, outcomes, strict=True)):
         memory.add(a, y)

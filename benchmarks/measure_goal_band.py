@@ -51,7 +51,7 @@ def band(reach: ReachMap, margin: float) -> ReachMap:
 
 def one_run(job: tuple[str, float, int, int, dict]) -> dict:
     name, margin, seed, movements, overrides = job
-    allowed = band(bl.reach_map(name), margin)
+    allowed = band(bl.REACH[name], margin)  # each worker's map, made once (bl._init)
     world = build_world(name, seed)
     world.goals = bl.goals_for(name, "validation")[1]
     learner = make_learner("random-goals", world.env.action_dim, world.env.outcome_dim, seed,
@@ -85,7 +85,7 @@ def main(argv: list[str] | None = None) -> int:
           f"overrides: {overrides or 'none'}; goals redrawn until within the margin of "
           "reachable space")
     start = time.perf_counter()
-    with ProcessPoolExecutor(a.jobs) as pool:
+    with ProcessPoolExecutor(a.jobs, initializer=bl._init, initargs=(a.worlds,)) as pool:
         results = list(pool.map(one_run, jobs))
     for world in a.worlds:
         free = [r["final"] for r in results if r["world"] == world and r["margin"] == UNRESTRICTED]

@@ -7,35 +7,42 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 from tests.conftest import PYTHON, REPO
 
 sys.path.insert(0, str(REPO / "benchmarks"))
 
 
-def test_the_band_holds_reachable_space_and_grows_with_the_margin():
+@pytest.fixture(scope="module")
+def reach():
+    """arm-20's reach map, made once for the module (a least-squares flood of its grid)."""
     import bench_learners as bl
+
+    return bl.reach_map("arm-20")
+
+
+def test_the_band_holds_reachable_space_and_grows_with_the_margin(reach):
     from measure_goal_band import UNRESTRICTED, band
 
-    reach = bl.reach_map("arm-20")
     narrow, wide = band(reach, 0.05), band(reach, 0.3)
     assert np.all(narrow.reached[reach.reached]) and np.all(wide.reached[narrow.reached])
     assert reach.area_share > narrow.area_share > wide.area_share > 0.0
     assert band(reach, UNRESTRICTED).area_share == 0.0
 
 
-def test_restricted_goals_stay_in_the_band():
+def test_restricted_goals_stay_in_the_band(reach):
     import bench_learners as bl
     from measure_goal_band import band
 
     from sgim_nodes.core.config import LearnerConfig
     from sgim_nodes.core.learners import make_learner
-    from sgim_nodes.core.runner import build_world
+    from sgim_nodes.core.planar_arm import ARMS
 
-    allowed = band(bl.reach_map("arm-20"), 0.05)
-    world = build_world("arm-20", 0)
-    learner = make_learner("random-goals", world.env.action_dim, world.env.outcome_dim, 0,
-                           LearnerConfig(), world.scale)
+    allowed = band(reach, 0.05)
+    arm = ARMS["arm-20"].make(0)  # its dimensions and scale (no benchmark or teaching set)
+    learner = make_learner("random-goals", arm.action_dim, arm.outcome_dim, 0,
+                           LearnerConfig(), arm.scale)
     bl.restrict_to_reachable(learner, allowed)
     rng = np.random.default_rng(1)
     goals = np.array([learner.selector.sample(rng).goal for _ in range(200)])
