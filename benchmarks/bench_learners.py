@@ -247,7 +247,7 @@ def report(results: list[dict], floors: dict[str, float], movements: int,
                 continue
             def avg(key: str, probes: list[dict] = probes) -> float:
                 return float(np.nanmean([p[key] for p in probes]))
-            shares = np.nanmean(np.array([p["mode1_unreachable_share"] for p in probes]), 0)
+            shares = frame_means(np.array([p["mode1_unreachable_share"] for p in probes], float))
             print(f"  {lr:14s} goals {avg('n_goals'):.0f}, explore {avg('explore_share'):.2f}, "
                   f"gain on memory {avg('gain_mean'):+.4f} (positive in "
                   f"{avg('gain_positive_share'):.2f}; goals in reachable space "
@@ -261,9 +261,22 @@ def report(results: list[dict], floors: dict[str, float], movements: int,
                       f"{avg('true_gain_mean'):+.4f} (positive in "
                       f"{avg('true_gain_positive_share'):.2f}; goals in reachable space "
                       f"{avg('true_gain_reachable_mean'):+.4f})")
+            if shares is None:  # random-goals: every goal is mode 2
+                continue
             print(f"  {'':14s} mode-1 goals in never-reachable space per {FRAME}: "
-                  + " ".join(f"{s:.2f}" for s in shares)
+                  + " ".join("-" if np.isnan(s) else f"{s:.2f}" for s in shares)
                   + f"  (area share {probes[0]['unreachable_area_share']:.2f})")
+
+
+def frame_means(shares: np.ndarray) -> np.ndarray | None:
+    """Mean over runs of each frame's share, NaN where no run drew a mode-1 goal in that
+    frame; None when no run drew one at all (a learner without mode 1)."""
+    seen = ~np.isnan(shares)
+    if not seen.any():
+        return None
+    counts = seen.sum(0)
+    sums = np.where(seen, shares, 0.0).sum(0)
+    return np.where(counts > 0, sums / np.maximum(counts, 1), np.nan)
 
 
 COLOURS = {"random": "tab:gray", "random-goals": "tab:purple", "saggriac": "tab:blue",

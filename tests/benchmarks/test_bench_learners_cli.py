@@ -43,3 +43,28 @@ def test_bad_counts_are_refused_with_a_message():
         done = subprocess.run([PYTHON, SCRIPT, *argv], capture_output=True, text=True,
                               timeout=60)
         assert done.returncode == 2 and "must be >= 1" in done.stderr, argv
+
+
+def test_mode1_shares_are_printed_only_for_learners_with_mode_1():
+    """random-goals draws no mode-1 goal: no share line for it, no NaN, no numpy warning;
+    a frame in which no run drew one is a dash, not a mean of nothing."""
+    import sys
+
+    import numpy as np
+
+    proc = subprocess.run([PYTHON, "-W", "error::RuntimeWarning", SCRIPT, "--worlds", "arm-7",
+                           "--learners", "random-goals", "saggriac", "--seeds", "1",
+                           "--movements", "600", "--eval-every", "300", "--goals",
+                           "validation", "--jobs", "1"],
+                          check=True, capture_output=True, text=True, timeout=300)
+    lines = [ln for ln in proc.stdout.splitlines() if "mode-1 goals in never-reachable" in ln]
+    assert len(lines) == 1, proc.stdout  # SAGG-RIAC's only
+    lower_level = proc.stdout.split("lower level and interest")[1]
+    assert "nan" not in lower_level
+    sys.path.insert(0, str(REPO / "benchmarks"))
+    from bench_learners import frame_means
+
+    nan = float("nan")
+    assert frame_means(np.array([[nan, nan], [nan, nan]])) is None
+    got = frame_means(np.array([[0.5, nan, nan], [0.25, 1.0, nan]]))
+    assert got[:2].tolist() == [0.375, 1.0] and np.isnan(got[2])
