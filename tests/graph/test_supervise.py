@@ -1,8 +1,14 @@
-"""The launcher's own plumbing: messages that survive a closed pipe, reasons quoted from logs."""
+"""The launcher's own plumbing: messages that survive a closed pipe, reasons quoted from logs,
+a teardown that always ends."""
 
 from __future__ import annotations
 
 import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
 
 import pytest
 
@@ -79,3 +85,76 @@ def test_a_resumed_runs_failure_names_the_log_of_its_own_segment(tmp_path):
     message = supervisor.failure("evaluator", 1)
     assert message == ("node evaluator stopped (exit 1) at movement 45: no answer from "
                        f"execute_action; see {resumed.log_dir / 'evaluator.log'}")
+
+
+@pytest.fixture
+def python_child(tmp_path):
+    """Start child Pythons (`_python`); any left running at the end is killed."""
+    children: list[subprocess.Popen] = []
+
+    def start(body: str, **popen) -> subprocess.Popen:
+        children.append(_python(tmp_path, body, **popen))
+        return children[-1]
+
+    yield start
+    for child in children:
+        if child.poll() is None:
+            child.kill()
+            child.wait()
+
+
+def _python(tmp_path, body: str, **popen) -> subprocess.Popen:
+    """A child Python whose launcher.log is tmp_path/launcher.log, running `body`."""
+    script = tmp_path / "child.py"
+    script.write_text(textwrap.dedent(f"""\
+        import re, sys, time
+        from sgim_nodes.graph import supervise
+        supervise.OUT.log = open({str(tmp_path / "launcher.log")!r}, "a")
+        """) + textwrap.dedent(body))
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    return subprocess.Popen([sys.executable, str(script)], env=env, text=True, **popen)
+
+
+def test_a_teardown_stuck_in_c_code_holding_the_gil_still_ends_and_leaves_its_stack(
+        python_child, tmp_path):
+    # Nested quantifiers: the regex engine backtracks for hours without releasing the GIL,
+    # like an rclpy call stuck in DDS; no Python timer could interrupt it.
+    child = python_child("""\
+        def stuck_in_c():
+            re.match(r"(a+)+$", "a" * 40 + "b")
+        with supervise.hard_deadline(1.0):
+            stuck_in_c()
+        """)
+    assert child.wait(timeout=120) == 1
+    log = (tmp_path / "launcher.log").read_text()
+    assert "Timeout (0:00:01)!" in log and "stuck_in_c" in log
+
+
+def test_a_block_that_ends_in_time_disarms_its_deadline(python_child, tmp_path):
+    child = python_child("""\
+        with supervise.hard_deadline(0.5):
+            pass
+        time.sleep(2.0)  # past the deadline, outside the block
+        """)
+    assert child.wait(timeout=120) == 0
+    assert "Timeout" not in (tmp_path / "launcher.log").read_text()
+
+
+def test_sigusr1_writes_every_threads_stack_and_the_launcher_goes_on(python_child, tmp_path):
+    child = python_child("""\
+        supervise.stacks_on_request()
+        def waiting_for_the_test():
+            print("ready", flush=True)
+            sys.stdin.readline()
+        waiting_for_the_test()
+        """, stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+    assert child.stdout.readline() == "ready\n"
+    child.send_signal(signal.SIGUSR1)
+    log = tmp_path / "launcher.log"
+    deadline = time.monotonic() + 60
+    while "waiting_for_the_test" not in log.read_text() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert "waiting_for_the_test" in log.read_text()
+    child.stdin.write("\n")
+    child.stdin.close()
+    assert child.wait(timeout=60) == 0

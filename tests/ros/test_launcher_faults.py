@@ -54,6 +54,18 @@ def launch(ros_processes, name: str, *argv: str, **popen) -> subprocess.Popen:
     return ros_processes.start(name, [RUN, *argv], text=True, **popen)
 
 
+def finish(launcher: subprocess.Popen, timeout: float) -> str:
+    """A launcher's output once it ends. One that outlives `timeout` is asked for its threads'
+    stacks first (SIGUSR1: into its launcher.log, which the failure report shows)."""
+    try:
+        return launcher.communicate(timeout=timeout)[0]
+    except subprocess.TimeoutExpired:
+        if launcher.poll() is None:
+            launcher.send_signal(signal.SIGUSR1)
+            time.sleep(2)
+        raise
+
+
 def test_a_killed_launcher_leaves_no_node_and_holds_its_domain_until_they_end(
         ros_processes, tmp_path):
     from sgim_nodes.graph.domain import reserve_domain
@@ -69,7 +81,7 @@ def test_a_killed_launcher_leaves_no_node_and_holds_its_domain_until_they_end(
     domain = metadata(run_dir)["ros_domain_id"]
     assert len(run_node_pids(run_dir)) >= 4, run_node_pids(run_dir)
     os.kill(child.pid, signal.SIGKILL)
-    child.communicate(timeout=30)
+    finish(child, 30)
     held, deadline = 0, time.monotonic() + 60
     while run_node_pids(run_dir):
         with reserve_domain(preferred=domain) as other:
@@ -90,9 +102,9 @@ def test_a_killed_launcher_leaves_no_node_and_holds_its_domain_until_they_end(
     wait_for(lambda: progress(run_dir, "bag.resume1/social_interaction.log") > 0, 120,
              "the resumed run to make movements")
     second = launch(ros_processes, "resume-2", "--resume", str(run_dir), "--quiet")
-    output, _ = second.communicate(timeout=60)
+    output = finish(second, 60)
     assert second.returncode == 2 and "in use by another launcher" in output, output
-    output, _ = first.communicate(timeout=300)
+    output = finish(first, 300)
     assert first.returncode == 0, output[-3000:]
     assert "ended without recording an outcome: it was killed" in output
     assert metadata(run_dir)["outcome"] == "finished"
@@ -125,7 +137,7 @@ def test_a_recorder_that_cannot_write_fails_the_run_and_resume_repairs_it(ros_pr
     child = launch(ros_processes, "run-full", "random", "--movements", "200",
                    "--eval-every", "100", "--runs-dir", str(tmp_path), "--name", "full",
                    "--quiet", "--prefix", "recorder=prlimit --fsize=4000")
-    output, _ = child.communicate(timeout=300)
+    output = finish(child, 300)
     assert child.returncode == 1, output[-3000:]
     meta = metadata(run_dir)
     assert meta["outcome"].startswith("failed: the recorder"), meta["outcome"]
@@ -138,7 +150,7 @@ def test_a_recorder_that_cannot_write_fails_the_run_and_resume_repairs_it(ros_pr
     recorded = recorded_count(run_dir)
     assert recorded < 200
     again = launch(ros_processes, "resume-full", "--resume", str(run_dir), "--quiet")
-    output, _ = again.communicate(timeout=300)
+    output = finish(again, 300)
     assert again.returncode == 0, output[-3000:]
     if meta["movements_done"] > recorded:  # the launcher saw more than the bag kept
         assert f"end at movement {recorded}" in output and "were lost" in output
@@ -155,7 +167,7 @@ def test_a_simulator_that_never_answers_ends_the_run_with_a_message(ros_processe
                    "--runs-dir", str(tmp_path), "--name", "silent", "--quiet",
                    "--param", "service_timeout=1.0", "--param", "service_retries=2",
                    "--prefix", f"sim_bridge={' '.join(SILENT)} sim_bridge execute_action")
-    output, _ = child.communicate(timeout=180)
+    output = finish(child, 180)
     assert child.returncode == 1, output[-3000:]
     outcome = metadata(run_dir)["outcome"]
     assert outcome.startswith("aborted") and "reach_goal" in outcome, outcome
@@ -180,7 +192,7 @@ def test_a_run_longer_than_its_timeout_fails_and_says_so(ros_processes, tmp_path
     run_dir = tmp_path / "slow"
     child = launch(ros_processes, "run-slow", "random", "--movements", "100000",
                    "--runs-dir", str(tmp_path), "--name", "slow", "--quiet", "--timeout", "20")
-    output, _ = child.communicate(timeout=180)
+    output = finish(child, 180)
     assert child.returncode == 1
     assert "timed out after 20 s (--timeout)" in metadata(run_dir)["outcome"], output[-2000:]
     assert not run_node_pids(run_dir)
@@ -194,7 +206,7 @@ def test_resuming_a_folder_whose_metadata_has_no_learner_says_what_to_fix(ros_pr
     (run_dir / "params.yaml").write_text(
         "/**:\n  ros__parameters:\n    learner: sgim-d\n    seed: 2\n")
     child = launch(ros_processes, "resume-broken", "--resume", str(run_dir))
-    output, _ = child.communicate(timeout=120)
+    output = finish(child, 120)
     assert child.returncode == 2
     assert "metadata.yaml has no 'learner'" in output and "params.yaml says learner: sgim-d" \
         in output

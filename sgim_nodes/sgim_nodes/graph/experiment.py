@@ -235,6 +235,7 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
     run_dir, meta = plan.run_dir, plan.meta
     plan.log_dir.mkdir(parents=True, exist_ok=True)
     supervise.OUT.log = open(plan.log_dir / "launcher.log", "a")  # noqa: SIM115
+    supervise.stacks_on_request()
     plan.params_file.write_text(yaml.safe_dump(plan.values.to_yaml(), sort_keys=False))
     reservation = reserve_domain() if args.domain is None else None
     domain = args.domain if reservation is None else reservation.domain_id
@@ -281,7 +282,7 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
             outcome, code = (str(error) if str(error).startswith("aborted") else
                              f"failed: {error}"), 1
         finally:
-            with shielded():
+            with shielded(), supervise.hard_deadline(supervise.TEARDOWN_LIMIT):
                 if progress is not None:
                     progress.spin(0.2)
                 if supervisor is not None:  # a prompt says goodbye by itself at the end
@@ -303,11 +304,13 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
                 meta.pop("launcher_pid", None)
                 meta["quarantine"] = quarantine(run_dir)
                 write_metadata(run_dir, meta)
-                if progress is not None:
-                    progress.close()
     say(f"{outcome}; bag and {METADATA} in {run_dir}"
         + (" (interrupted: the bag holds what was recorded; --resume carries on)"
            if code > 128 else ""))
+    if progress is not None:  # last: DDS participant deletion is where a process can hang
+        with supervise.stop_signals() as shielded, shielded(), \
+                supervise.hard_deadline(supervise.CLOSE_LIMIT):
+            progress.close()
     return code
 
 

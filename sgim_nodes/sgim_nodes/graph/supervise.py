@@ -4,7 +4,10 @@ A run is finished only when the arbiter says so (exit code 0 after its FINISHED 
 the recorder has written everything (exit code 0; the recorder exits 3 on a write error such
 as a full disk). Any other node that stops before the end fails the run, the simulator
 excepted (it holds no state and is restarted, at most MAX_RESPAWNS times). Every wait here is
-bounded: the run's --timeout, the arbiter's exit after its last status, the recorder's end.
+bounded: the run's --timeout, the arbiter's exit after its last status, the recorder's end,
+and the launcher's own teardown (`hard_deadline`: past it, every thread's stack goes to
+launcher.log and the launcher exits with 1; `kill -USR1` a launcher to get those stacks at any
+time).
 
 The launcher's own output goes to the terminal and to logs/launcher.log; a terminal pipe that
 breaks (`run_experiment.sh ... | tee log`, then Ctrl-C, which also ends tee) is noticed once
@@ -14,6 +17,7 @@ and then ignored, so stopping the nodes never fails half-way.
 from __future__ import annotations
 
 import contextlib
+import faulthandler
 import os
 import re
 import signal
@@ -31,6 +35,9 @@ ARBITER_EXIT_WAIT = 60.0  # seconds for the arbiter to exit after its final stat
 # The recorder ends by itself once the movements up to the final count are in and the graph
 # has been quiet (at most 30 s after the final status, nodes/recorder.py FINISH_LIMIT).
 RECORDER_EXIT_WAIT = 45.0
+# The teardown: a prompt's goodbye (<= 10 s), stop_all (<= 20 s), the metadata (well under 1 s).
+TEARDOWN_LIMIT = 90.0
+CLOSE_LIMIT = 20.0  # the launcher's own rclpy node and context (DDS participant deletion)
 RECORDER_WRITE_ERROR = 3  # the recorder's exit code when it cannot write the bag
 ROS_LOG_PREFIX = re.compile(r"^\[[A-Z]+\] \[[\d.]+\] \[[\w/.]+\]: ")
 
@@ -100,6 +107,32 @@ OUT = SafeStream()
 
 def say(message: str) -> None:
     OUT.write(f"run_experiment: {message}\n")
+
+
+def _stack_file() -> TextIO:
+    return OUT.log if OUT.log is not None else sys.__stderr__
+
+
+def stacks_on_request(signum: int = signal.SIGUSR1) -> None:
+    """`kill -USR1 <launcher>` writes every thread's stack to launcher.log (else stderr) and
+    the run goes on: how to see where a launcher that seems stuck is."""
+    faulthandler.register(signum, file=_stack_file(), all_threads=True, chain=False)
+
+
+@contextlib.contextmanager
+def hard_deadline(seconds: float):
+    """The last resort for a block that must end: if it is still running after `seconds`,
+    every thread's stack goes to launcher.log (else stderr) and the process exits with 1.
+    faulthandler's watchdog is a C thread, so it fires even when a thread hangs in C code
+    holding the GIL (an rclpy or DDS call), where no Python timer could run."""
+    stream = _stack_file()
+    with contextlib.suppress(OSError, ValueError):
+        stream.flush()
+    faulthandler.dump_traceback_later(seconds, exit=True, file=stream)
+    try:
+        yield
+    finally:
+        faulthandler.cancel_dump_traceback_later()
 
 
 @contextlib.contextmanager
