@@ -10,7 +10,8 @@ repeats. A third model, ours without its local-linear step (the candidate it ran
 that pair's own action), tells the ranking's share of the gap from the step's, a fourth,
 ours without the gates on thin fits (``local_min_casts`` and ``local_rank_min_casts`` 0),
 the gates' share,
-and a fifth, ours without the held-out check of its step (``local_step_check: none``).
+a fifth, ours without the held-out check of its step (``local_step_check: none``), and a
+sixth, ours with its step unbounded by the fit's spread (``local_step_support: 0``).
 ``--goals validation`` (fishing) compares them on other points of the benchmark's grid cells
 (its tool's ``validation_goals``, seed 7), so that a choice made here is not made on the
 benchmark's own goals.
@@ -67,14 +68,17 @@ def main() -> int:
     # ours without its local-linear step: the candidate it ranks best, that pair's own action
     unmoved = InverseModel(learner.memory, "local-linear", ours.l_max, ours.k_max, ours.alpha,
                            ours.local_radius, ours.local_neighbours, 1e-12, ours.min_casts,
-                           ours.noise_rms, ours.rank_min_casts)
+                           ours.noise_rms, ours.rank_min_casts, ours.step_support)
     ungated = InverseModel(learner.memory, "local-linear", ours.l_max, ours.k_max, ours.alpha,
                            ours.local_radius, ours.local_neighbours, ours.local_step, 0.0,
-                           ours.noise_rms)
+                           ours.noise_rms, 0.0, ours.step_support)
     unchecked = inverse_model_for(learner.memory, LearnerConfig(local_step_check="none"),
                                   world.scale)
+    unsupported = inverse_model_for(learner.memory, LearnerConfig(local_step_support=0.0),
+                                    world.scale)
     models = {"ours": ours, "nearest": InverseModel(learner.memory, "nearest"),
-              "ours-no-step": unmoved, "ours-no-gate": ungated, "ours-unchecked": unchecked}
+              "ours-no-step": unmoved, "ours-no-gate": ungated, "ours-unchecked": unchecked,
+              "ours-unsupported": unsupported}
     goals = world.goals if a.goals == "benchmark" else goals_for(a.world, "validation")[1]
     actions = {label: {tuple(g): np.asarray(m(g), float) for g in goals}
                for label, m in models.items()}

@@ -180,6 +180,34 @@ def test_never_worse_than_the_nearest_neighbour_on_the_same_memory(world):
         assert error(ours) <= error(nearest) * 1.02, (world, seed)
 
 
+def test_the_learners_steps_stay_within_twice_their_fits_spread():
+    """LearnerConfig.local_step_support reaches the inverse model: on a 20-joint arm memory,
+    where unbounded steps go past their casts, every step is within 2 spreads of its fit."""
+    spec = ARMS["arm-20"]
+    noisy = spec.make(0)
+    goals = benchmark_goals(spec.make(0, noise=0.0), spec.cells)
+    learner = make_learner("random-goals", noisy.action_dim, 2, 0, LearnerConfig(), noisy.scale)
+    for _ in range(1200):
+        a, _ = learner.next_action()
+        learner.observe(a, noisy.execute(a))
+
+    def steps(config):
+        model = inverse_model_for(learner.memory, config, noisy.scale)
+        found = []
+        for goal in goals:
+            est = model.estimate(goal)
+            delta = est.action - learner.memory.actions[est.candidate_index]
+            if np.linalg.norm(delta) > 0:
+                fit = model.fits.get(est.candidate_index)
+                found.append(np.linalg.norm(delta) / fit.spread_along(
+                    delta / np.linalg.norm(delta)))
+        return np.array(found)
+
+    bounded, free = steps(LearnerConfig()), steps(LearnerConfig(local_step_support=0.0))
+    assert len(bounded) and np.all(bounded <= 2.0 + 1e-9)
+    assert np.any(free > 2.0)  # the bound is at work on this memory
+
+
 def test_on_motor_babbling_memories_it_is_the_nearest_neighbour():
     """Random actions leave no clusters in action space: every fit is thin, so with the
     defaults ours ranks by stored outcomes and gives the nearest neighbour's answer, never

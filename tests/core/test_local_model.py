@@ -59,6 +59,42 @@ def test_step_stays_within_its_radius_and_the_box():
     assert np.linalg.norm(action - centre) <= 0.1 + 1e-12 and np.all(np.abs(action) <= 1.0)
 
 
+def _line_of_casts():
+    """Casts spread +-0.1 along the first action axis, +-0.01 along the second, none along
+    the others; a radius so large that every weight is about 1."""
+    offsets = [t * np.eye(4)[0] + u * np.eye(4)[1] for t in (-0.1, -0.05, 0.05, 0.1)
+               for u in (-0.01, 0.01)]
+    mem = _memory(offsets)
+    return local_model.fit(mem, np.zeros(4), radius=100.0, max_pairs=60)
+
+
+def test_the_spread_along_a_direction_is_the_rms_offset_of_the_casts_that_way():
+    fit = _line_of_casts()
+    axis0, axis1, diagonal = np.eye(4)[0], np.eye(4)[1], np.array([1.0, 1.0, 0, 0]) / np.sqrt(2)
+    assert fit.spread_along(axis0) == pytest.approx(np.sqrt((0.1**2 + 0.05**2) / 2), rel=1e-4)
+    assert fit.spread_along(axis1) == pytest.approx(0.01, rel=1e-4)
+    assert fit.spread_along(np.eye(4)[3]) == pytest.approx(0.0, abs=1e-12)
+    # Offsets along axis 0 and axis 1 are uncorrelated: the squares add, halved.
+    assert fit.spread_along(diagonal) == pytest.approx(
+        np.sqrt((fit.spread_along(axis0) ** 2 + 0.01**2) / 2), rel=1e-4)
+
+
+def test_a_supported_step_goes_no_farther_than_its_casts_and_keeps_its_direction():
+    fit = _line_of_casts()
+    goal = fit.outcome + np.array([1.0, 0.5])  # far: every bound binds
+    free, _ = local_model.step(fit, goal, radius=0.5)
+    bounded, predicted = local_model.step(fit, goal, radius=0.5, support=2.0)
+    assert np.linalg.norm(free) == pytest.approx(0.5)
+    direction = bounded / np.linalg.norm(bounded)
+    assert np.linalg.norm(bounded) == pytest.approx(2.0 * fit.spread_along(direction))
+    assert direction == pytest.approx(free / np.linalg.norm(free))
+    assert predicted == pytest.approx(fit.outcome + fit.jacobian @ bounded)
+    # A goal within the casts' reach: the bound does not bind, the step is the free one.
+    near = fit.outcome + 0.2 * fit.jacobian @ (0.05 * np.eye(4)[0])
+    assert local_model.step(fit, near, 0.5, 2.0)[0] == pytest.approx(
+        local_model.step(fit, near, 0.5)[0])
+
+
 def _reference_loo(memory, centre, radius, max_pairs):
     """Leave-one-out by refitting: each pair dropped in turn, the others refitted with the same
     weights and ridge, the dropped pair predicted."""

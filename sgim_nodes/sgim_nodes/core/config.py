@@ -124,6 +124,14 @@ class LearnerConfig:
     local_step_fraction: float = 0.25
     """The local-linear inverse moves the chosen action towards the goal by at most this
     fraction of the fit's radius.  Chosen by measurement (docs/learners.md)."""
+    local_step_support: float = 2.0
+    """The local-linear inverse's step also goes no farther than this many times the fit's
+    spread of actions along the step's direction (its weighted rms offset that way): past the
+    casts it was fitted on, a linear model extrapolates. 0: no such bound. On the fishing
+    memory where the step had lost to the nearest neighbour (SAGG-RIAC seed 0), 2 turned the
+    loss on the validation goals (+0.0013) into a gain (-0.0036) and kept every other run's
+    gain, the arms' too; 1 and 0.5 cut the 7-joint arm's gain (docs/learners.md, section 1).
+    Chosen by measurement on validation goals."""
     local_min_casts: float = 10.0
     """The local-linear inverse takes its step only when the fit averages at least this many
     casts (its effective number of pairs, local_model.LocalFit.n_effective); below, it returns
@@ -236,7 +244,7 @@ class LearnerConfig:
                 fail(name, "must be > 0")
         for name in ("alpha", "explore_gain", "min_region_width_size", "explore_action",
                      "success_tolerance_noise", "interest_noise_correction",
-                     "local_min_casts", "local_rank_min_casts"):
+                     "local_min_casts", "local_rank_min_casts", "local_step_support"):
             if getattr(self, name) < 0.0:
                 fail(name, "must be >= 0")
         if not 0.0 <= self.explore_cap <= 1.0:
@@ -276,7 +284,8 @@ class LearnerConfig:
         return [f.name for f in fields(cls)]
 
 
-BEFORE_IT_EXISTED: dict[str, Any] = {"local_step_check": "none", "local_rank_min_casts": 0.0}
+BEFORE_IT_EXISTED: dict[str, Any] = {"local_step_check": "none", "local_rank_min_casts": 0.0,
+                                     "local_step_support": 0.0}
 """For a field added after runs were recorded: the value that does what the learner did before
 the field existed. A run recorded then, resumed today, goes on as it ran (recorded_learner)."""
 

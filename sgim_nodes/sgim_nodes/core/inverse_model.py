@@ -15,17 +15,18 @@ linear model fitted in that action's own neighbourhood:
   to the goal: the prediction averages the noise of every cast near the action, where a
   single stored outcome carries it whole. A candidate with no close pairs, or whose fit
   averages fewer than ``rank_min_casts`` casts, is ranked by its own stored outcome, so on a
-  memory with no clusters this is the nearest neighbour. The chosen
-  action is then moved by one step of that model towards the goal, no farther than
-  ``local_step`` (a quarter of the fitted radius by default: measured, docs/learners.md),
-  and only when the fit averages at least ``min_casts`` casts: a fit on a handful of casts
-  in 24 dimensions follows their noise, and its step lost to the nearest neighbour on sparse
-  fishing memories; and, given the world's noise (``noise_rms``), only when the gain the step
-  predicts (how much closer to the goal than the unmoved action) exceeds the fit's misfit,
-  its held-out error beyond that noise: a predicted gain smaller than what the model gets
-  wrong on casts it did not see is no evidence. On the fishing world's non-smooth actions the
-  step then stays out where it lost (docs/learners.md, section 1); on the smooth arms, where
-  the fit predicts to within the noise, it is kept.
+  memory with no clusters this is the nearest neighbour. The chosen action is then moved by
+  one step of that model towards the goal, no farther than ``local_step`` (a quarter of the
+  fitted radius by default: measured, docs/learners.md) nor ``step_support`` times the fit's
+  spread of actions along the step (no extrapolation past the casts the fit stands on), and
+  only when the fit averages at least ``min_casts`` casts: a fit on a handful of casts in 24
+  dimensions follows their noise, and its step lost to the nearest neighbour on sparse
+  fishing memories; and, given the world's noise (``noise_rms``), only when the gain the
+  step predicts (how much closer to the goal than the unmoved action) exceeds the fit's
+  misfit, its held-out error beyond that noise: a predicted gain smaller than what the model
+  gets wrong on casts it did not see is no evidence. On the fishing world's non-smooth
+  actions the step then stays out where it lost (docs/learners.md, section 1); on the smooth
+  arms, where the fit predicts to within the noise, it is kept.
 
 docs/learners.md compares the three on the same memories (benchmarks/bench_inverse.py).
 """
@@ -69,7 +70,7 @@ class InverseModel:
                  k_max: int = 5, alpha: float = 0.5, local_radius: float = 1.0,
                  local_neighbours: int = 60, local_step: float = 0.25,
                  min_casts: float = 0.0, noise_rms: float | None = None,
-                 rank_min_casts: float = 0.0) -> None:
+                 rank_min_casts: float = 0.0, step_support: float = 0.0) -> None:
         if method not in ("nearest", "reliable", "local-linear"):
             raise ValueError(f"unknown inverse model {method!r}")
         self.memory = memory
@@ -83,6 +84,7 @@ class InverseModel:
         self.min_casts = min_casts
         self.noise_rms = noise_rms
         self.rank_min_casts = rank_min_casts
+        self.step_support = step_support
         self.fits = FitCache(memory, local_radius, local_neighbours)
 
     def most_reliable(self, goal: np.ndarray) -> tuple[int, float]:
@@ -111,7 +113,8 @@ class InverseModel:
         else:
             index, score, outcome, fit = self.best_predicted(goal)
             if fit is not None and fit.n_effective >= self.min_casts:
-                action, predicted = local_model.step(fit, goal, self.local_step)
+                action, predicted = local_model.step(fit, goal, self.local_step,
+                                                     self.step_support)
                 # A flat or undetermined fit predicts (almost) no change: then stay put.
                 if (np.linalg.norm(predicted - fit.outcome) > 0.05 * score
                         and self._step_is_evidenced(fit, score, goal, predicted)):

@@ -64,7 +64,8 @@ def inverse_model_for(memory: Memory, config: LearnerConfig, scale: WorldScale) 
     noise = scale.noise_rms if c.local_step_check == "held-out" else None
     return InverseModel(memory, c.inverse_model, c.l_max, c.k_max, c.alpha, radius,
                         c.local_neighbours, c.local_step_fraction * radius,
-                        c.local_min_casts, noise, c.local_rank_min_casts)
+                        c.local_min_casts, noise, c.local_rank_min_casts,
+                        c.local_step_support)
 
 
 def region_tree_for(config: LearnerConfig, scale: WorldScale) -> RegionTree:

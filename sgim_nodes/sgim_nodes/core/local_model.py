@@ -54,6 +54,12 @@ class LocalFit:
         loo = self.residuals / np.maximum(1.0 - hat, 1e-9)[:, None]
         return float(np.sqrt((w * (loo**2).sum(1)).sum() / w.sum()))
 
+    def spread_along(self, direction: np.ndarray) -> float:
+        """Weighted rms offset of the fit's actions from its centre along ``direction`` (a unit
+        vector): how far out, that way, the fit has casts to stand on."""
+        offsets = self.design[:, 1:]  # sqrt(w) * (a_i - a_c)
+        return float(np.linalg.norm(offsets @ direction) / np.sqrt(self.weights.sum()))
+
     def misfit(self, noise_rms: float) -> float:
         """The held-out error beyond the world's noise (rms distance of one cast from its
         mean): what the model itself gets wrong, 0 when it predicts as well as noise allows."""
@@ -89,16 +95,22 @@ def fit(memory: Memory, centre: np.ndarray, radius: float, max_pairs: int) -> Lo
                     resid, w)
 
 
-def step(model: LocalFit, goal: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
+def step(model: LocalFit, goal: np.ndarray, radius: float,
+         support: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """The action the model says reaches ``goal``, no farther than ``radius`` from its centre
-    (and clipped to [-1, 1]), with the outcome the model predicts for it."""
+    and, when ``support`` > 0, no farther than ``support`` times the fit's spread of actions
+    along the step's direction (a linear model is evidence only where its casts are: past
+    them it extrapolates), clipped to [-1, 1]; with the outcome the model predicts for it."""
     jac = model.jacobian
     gap = np.asarray(goal, dtype=float) - model.outcome
     gram = jac @ jac.T
     mu = 1e-9 * max(float(np.trace(gram)), 1e-12)
     delta = jac.T @ np.linalg.solve(gram + mu * np.eye(len(gram)), gap)
     norm = float(np.linalg.norm(delta))
-    if norm > radius > 0.0:
-        delta *= radius / norm
+    limit = radius if radius > 0.0 else np.inf
+    if support > 0.0 and norm > 0.0:
+        limit = min(limit, support * model.spread_along(delta / norm))
+    if norm > limit:
+        delta *= limit / norm
     action = np.clip(model.centre + delta, -1.0, 1.0)
     return action, model.outcome + jac @ (action - model.centre)

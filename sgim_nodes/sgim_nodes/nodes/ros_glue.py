@@ -125,7 +125,7 @@ LEARNER_BOUNDS = {
     **dict.fromkeys(("alpha", "explore_gain", "min_region_width_size", "explore_action",
                      "success_tolerance_noise", "interest_noise_correction",
                      "imitation_count", "local_min_casts",
-                     "local_rank_min_casts"), at_least(0)),
+                     "local_rank_min_casts", "local_step_support"), at_least(0)),
     "inverse_model": one_of(*INVERSE_MODELS),
     "local_step_check": one_of(*STEP_CHECKS),
     "optimiser": one_of(*OPTIMISERS),
