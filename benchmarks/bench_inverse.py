@@ -6,7 +6,7 @@ core/inverse_model.py (``nearest``, ``reliable``, ``local-linear``, and the pape
 interpolation of several neighbours' actions for reference; and ``local-linear`` without its
 held-out step check, without its step at all, and with fits of any size ranking candidates
 (``local_rank_min_casts`` 0, as before it existed) or only fits of at least 3 or 10 casts,
-and with its step unbounded by the fit's spread, ``local_step_support`` 0),
+and with its step bounded by twice the fit's spread, ``local_step_support`` 2),
 on the arm's VALIDATION goals (the benchmark goals stay untouched by choices), and each chosen
 action is cast on the noise-free arm, so the figure is the inverse model's own error on that
 memory, free of cast noise.
@@ -58,7 +58,7 @@ VARIANTS = {"unchecked": {"local_step_check": "none"},
             "thin-ranking": {"local_rank_min_casts": 0.0},
             "rank-3": {"local_rank_min_casts": 3.0},
             "rank-10": {"local_rank_min_casts": 10.0},
-            "unsupported": {"local_step_support": 0.0}}
+            "support-2": {"local_step_support": 2.0}}
 """local-linear with one LearnerConfig field changed from the default."""
 
 
