@@ -181,23 +181,29 @@ def test_never_worse_than_the_nearest_neighbour_on_the_same_memory(world):
 
 
 def test_the_learners_steps_stay_within_twice_their_fits_spread():
-    """LearnerConfig.local_step_support reaches the inverse model: on a 20-joint arm memory,
-    where unbounded steps (the default) go past their casts, with 2 every step is within 2
-    spreads of its fit."""
+    """LearnerConfig.local_step_support reaches the inverse model: on a 20-joint arm memory of
+    tight clusters of casts, whose goals lie beyond them, unbounded steps (the default) go past
+    their casts and with 2 every step is within 2 spreads of its fit. The memory is built by
+    hand, not learnt: a learnt memory depends on the CPU's BLAS rounding (one learnt on an AMD
+    EPYC held such steps; the same seed on an Intel Xeon held one step, within 2 spreads)."""
     spec = ARMS["arm-20"]
-    noisy = spec.make(0)
-    goals = benchmark_goals(spec.make(0, noise=0.0), spec.cells)
-    learner = make_learner("random-goals", noisy.action_dim, 2, 0, LearnerConfig(), noisy.scale)
-    for _ in range(1200):
-        a, _ = learner.next_action()
-        learner.observe(a, noisy.execute(a))
+    noisy, quiet = spec.make(0), spec.make(0, noise=0.0)
+    rng = np.random.default_rng(0)
+    postures = rng.uniform(-0.5, 0.5, (40, noisy.action_dim))
+    memory = Memory(noisy.action_dim, 2)
+    for posture in postures:
+        for _ in range(30):
+            action = np.clip(posture + rng.normal(0.0, 0.05, posture.shape), -1.0, 1.0)
+            memory.add(action, noisy.execute(action).outcome)
+    goals = np.array([quiet.execute(p).outcome for p in postures])
+    goals += rng.normal(0.0, 0.1, goals.shape)  # beyond each cluster's landings
 
     def steps(config):
-        model = inverse_model_for(learner.memory, config, noisy.scale)
+        model = inverse_model_for(memory, config, noisy.scale)
         found = []
         for goal in goals:
             est = model.estimate(goal)
-            delta = est.action - learner.memory.actions[est.candidate_index]
+            delta = est.action - memory.actions[est.candidate_index]
             if np.linalg.norm(delta) > 0:
                 fit = model.fits.get(est.candidate_index)
                 found.append(np.linalg.norm(delta) / fit.spread_along(
@@ -205,8 +211,8 @@ def test_the_learners_steps_stay_within_twice_their_fits_spread():
         return np.array(found)
 
     bounded, free = steps(LearnerConfig(local_step_support=2.0)), steps(LearnerConfig())
-    assert len(bounded) and np.all(bounded <= 2.0 + 1e-9)
-    assert np.any(free > 2.0)  # the bound is at work on this memory
+    assert len(bounded) >= 10 and np.all(bounded <= 2.0 + 1e-9)
+    assert np.sum(free > 2.0) >= 5  # the bound is at work on this memory
 
 
 def test_on_motor_babbling_memories_it_is_the_nearest_neighbour():
