@@ -172,11 +172,15 @@ def run_one(job: tuple) -> dict:
 REACH: dict[str, ReachMap] = {}
 
 
-def restrict_to_reachable(learner: GoalBabblingLearner, reach: ReachMap) -> None:
-    """Redraw the learner's goals until one falls in reachable space (the ORACLE diagnostic)."""
+def restrict_to_reachable(learner: GoalBabblingLearner, reach: ReachMap,
+                          from_movement: int = 0) -> None:
+    """Redraw the learner's goals until one falls in reachable space (the ORACLE diagnostic),
+    from movement ``from_movement`` on (before it, goals are the learner's own)."""
     sample = learner.selector.sample
 
     def reachable_sample(rng: np.random.Generator):
+        if learner.n_movements < from_movement:
+            return sample(rng)
         while True:
             choice = sample(rng)
             if reach.share(np.asarray(choice.goal, float)[None]) == 0.0:

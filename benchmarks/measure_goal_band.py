@@ -50,14 +50,14 @@ def band(reach: ReachMap, margin: float) -> ReachMap:
 
 
 def one_run(job: tuple[str, float, int, int, dict]) -> dict:
-    name, margin, seed, movements, overrides = job
+    name, margin, seed, movements, overrides, after = job
     allowed = band(bl.REACH[name], margin)  # each worker's map, made once (bl._init)
     world = build_world(name, seed)
     world.goals = bl.goals_for(name, "validation")[1]
     learner = make_learner("random-goals", world.env.action_dim, world.env.outcome_dim, seed,
                            LearnerConfig(**overrides), world.scale)
     if np.isfinite(margin):
-        bl.restrict_to_reachable(learner, allowed)
+        bl.restrict_to_reachable(learner, allowed, after)
     curve = run(learner, world, movements, movements, seed, lambda record: None)
     return {"world": name, "margin": margin, "seed": seed, "final": curve[-1],
             "excluded": allowed.area_share}
@@ -72,18 +72,23 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seeds", type=int, default=10)
     p.add_argument("--movements", type=int, default=5000)
     p.add_argument("--jobs", type=int, default=2)
+    p.add_argument("--after", type=int, default=0, metavar="MOVEMENT",
+                   help="restrict goals only from this movement on (uniform before it): "
+                   "does late focus pay once the frontier is found?")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a LearnerConfig field for every run (repeatable)")
     a = p.parse_args(argv)
     if a.seeds < 2 or a.movements < 1 or a.jobs < 1 or any(m <= 0 for m in a.margins):
         p.error("--seeds must be >= 2, --movements and --jobs >= 1, every margin > 0")
+    if not 0 <= a.after < a.movements:
+        p.error("--after must be in [0, --movements)")
     overrides = bl.parse_set(a.set)
     margins = [UNRESTRICTED, *sorted(set(a.margins), reverse=True)]
-    jobs = [(w, m, s, a.movements, overrides) for w in a.worlds for m in margins
+    jobs = [(w, m, s, a.movements, overrides, a.after) for w in a.worlds for m in margins
             for s in range(a.seeds)]
     print(f"random-goals, {a.seeds} seeds x {a.movements} movements, validation goals, "
           f"overrides: {overrides or 'none'}; goals redrawn until within the margin of "
-          "reachable space")
+          f"reachable space{f' from movement {a.after} on' if a.after else ''}")
     start = time.perf_counter()
     with ProcessPoolExecutor(a.jobs, initializer=bl._init, initargs=(a.worlds,)) as pool:
         results = list(pool.map(one_run, jobs))

@@ -49,7 +49,33 @@ def test_restricted_goals_stay_in_the_band(reach):
     assert allowed.share(goals) == 0.0
 
 
+def test_the_restriction_starts_at_its_movement(reach):
+    """--after: goals are the learner's own (uniform) before the movement, in the band after."""
+    import bench_learners as bl
+    from measure_goal_band import band
+
+    from sgim_nodes.core.config import LearnerConfig
+    from sgim_nodes.core.learners import make_learner
+    from sgim_nodes.core.planar_arm import ARMS
+
+    allowed = band(reach, 0.05)
+    arm = ARMS["arm-20"].make(0)
+    learner = make_learner("random-goals", arm.action_dim, arm.outcome_dim, 0,
+                           LearnerConfig(), arm.scale)
+    bl.restrict_to_reachable(learner, allowed, from_movement=100)
+    rng = np.random.default_rng(2)
+    early = np.array([learner.selector.sample(rng).goal for _ in range(400)])
+    learner.n_movements = 100
+    late = np.array([learner.selector.sample(rng).goal for _ in range(200)])
+    assert allowed.share(early) > 0.5 * allowed.area_share
+    assert allowed.share(late) == 0.0
+
+
 def test_bad_margins_are_refused():
     done = subprocess.run([PYTHON, str(REPO / "benchmarks" / "measure_goal_band.py"),
                            "--margins", "0"], capture_output=True, text=True, timeout=120)
     assert done.returncode == 2 and "margin" in done.stderr
+    late = subprocess.run([PYTHON, str(REPO / "benchmarks" / "measure_goal_band.py"),
+                           "--movements", "100", "--after", "100"], capture_output=True,
+                          text=True, timeout=120)
+    assert late.returncode == 2 and "--after" in late.stderr
