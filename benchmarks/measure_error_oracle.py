@@ -28,6 +28,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
+from scipy import stats
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(REPO / "sgim_nodes"), str(REPO / "benchmarks")]
@@ -101,6 +102,18 @@ def one_run(job: tuple[str, str, int, int, dict, int, int, float]) -> dict:
             "probe_errors": oracle.errors if oracle else []}
 
 
+def paired(rows: dict[str, list[dict]]) -> str:
+    """Both learners are the same run until ``--after`` (same seed, same streams): the
+    per-seed difference of their final errors, and its paired t-test."""
+    by_seed = {k: {r["seed"]: r["final"] for r in v} for k, v in rows.items()}
+    seeds = sorted(set(by_seed[UNIFORM]) & set(by_seed[ORACLE]))
+    diff = np.array([by_seed[ORACLE][s] - by_seed[UNIFORM][s] for s in seeds])
+    p = stats.ttest_rel([by_seed[ORACLE][s] for s in seeds],
+                        [by_seed[UNIFORM][s] for s in seeds]).pvalue if len(seeds) > 1 else np.nan
+    return (f"paired by seed: oracle - random-goals {diff.mean():+.4f} (better in "
+            f"{int((diff < 0).sum())}/{len(diff)}), paired t-test p = {p:.3g}")
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -144,7 +157,8 @@ def main(argv: list[str] | None = None) -> int:
         curves = np.array([r["probe_errors"] for r in rows[ORACLE]])
         print("  oracle's probe-cell error (noise-free, mean over seeds) at each measurement: "
               + " ".join(f"{v:.4f}" for v in curves.mean(axis=0)))
-        print(f"  oracle against random-goals: p = {bl.welch(finals[ORACLE], finals[UNIFORM]):.3g}")
+        print(f"  oracle against random-goals: Welch p = "
+              f"{bl.welch(finals[ORACLE], finals[UNIFORM]):.3g}; " + paired(rows))
     print(f"wall time {time.perf_counter() - start:.0f} s")
     return 0
 

@@ -70,3 +70,12 @@ def test_bad_options_are_refused():
         done = subprocess.run([PYTHON, script, *args], capture_output=True, text=True,
                               timeout=120)
         assert done.returncode == 2 and word in done.stderr, (args, done.stderr)
+
+
+def test_the_paired_comparison_matches_runs_by_seed():
+    from measure_error_oracle import ORACLE, UNIFORM, paired
+
+    rows = {UNIFORM: [{"seed": s, "final": v} for s, v in ((0, 0.040), (1, 0.050), (2, 0.030))],
+            ORACLE: [{"seed": s, "final": v} for s, v in ((2, 0.031), (0, 0.037), (1, 0.046))]}
+    text = paired(rows)
+    assert "-0.0020" in text and "better in 2/3" in text
