@@ -7,6 +7,8 @@ counts the time this process waited for a core (compare the two to see how loade
 was). ``--repeat N`` runs the same casts N times and prints each and the best.
 ``--accuracy N`` also casts N random actions without noise in this world and in one whose
 constraint solver runs 300 sweeps (converged), and prints how far the touch-downs differ.
+``--shared-world N`` times a bare ``stepSimulation`` of 1, 2, 4, ... N copies of the rod in
+ONE world, per step and per rod: could independent casts (the evaluation's goals) be batched?
 
     PYTHONPATH=sim_bridge .venv/bin/python benchmarks/bench_sim_speed.py --casts 500 [--profile]
 """
@@ -35,9 +37,15 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--solver", choices=("shipped", "dantzig"), default="shipped",
                         help="constraint solver: the world's own, or MLCP solved by Dantzig's "
                         "pivoting (measured, not applied: README_world.md, Speed)")
+    parser.add_argument("--shared-world", type=int, default=0, metavar="N",
+                        help="only time bare steps of 1, 2, 4, ... N rods in one world")
     args = parser.parse_args(argv)
-    if args.casts < 1 or args.repeat < 1:
-        parser.error("--casts and --repeat must be >= 1")
+    if args.casts < 1 or args.repeat < 1 or args.shared_world < 0:
+        parser.error("--casts and --repeat must be >= 1, --shared-world >= 0")
+    if args.shared_world:
+        for line in shared_world_steps(args.shared_world):
+            print(line, flush=True)
+        return
     world = FishingWorld(seed=args.seed)
     if args.solver != "shipped":
         set_solver(world, args.solver)
@@ -64,6 +72,48 @@ def main(argv: list[str] | None = None) -> None:
         pstats.Stats(prof).sort_stats("tottime").print_stats(10)
     if args.accuracy > 0:
         print(solver_accuracy(args.accuracy, args.seed, args.solver))
+
+
+def shared_world_steps(most: int, steps: int = 2000) -> list[str]:
+    """Bare stepSimulation time with 1, 2, 4, ... ``most`` rods side by side in one world,
+    built as FishingWorld builds its one (same solver, sweeps and time step), at rest."""
+    import os
+    import tempfile
+
+    import pybullet as pb
+
+    from sim_bridge.fishing_world import DEFAULT_TIME_STEP, SOLVER_ITERATIONS
+    from sim_bridge.rod_urdf import RodSpec, build_urdf
+
+    fd, path = tempfile.mkstemp(suffix=".urdf", prefix="shared_world_")
+    with os.fdopen(fd, "w") as f:
+        f.write(build_urdf(RodSpec()))
+    lines, n = [], 1
+    try:
+        while n <= most:
+            c = pb.connect(pb.DIRECT)
+            pb.setPhysicsEngineParameter(fixedTimeStep=DEFAULT_TIME_STEP, numSubSteps=0,
+                                         physicsClientId=c)
+            with _quiet_c_stdout():
+                pb.setPhysicsEngineParameter(constraintSolverType=pb.CONSTRAINT_SOLVER_LCP_PGS,
+                                             numSolverIterations=SOLVER_ITERATIONS,
+                                             physicsClientId=c)
+            for i in range(n):
+                pb.loadURDF(path, basePosition=[10.0 * i, 0.0, 0.0], useFixedBase=True,
+                            flags=pb.URDF_USE_INERTIA_FROM_FILE, physicsClientId=c)
+            for _ in range(50):
+                pb.stepSimulation(c)
+            t0 = time.process_time()
+            for _ in range(steps):
+                pb.stepSimulation(c)
+            per_step = (time.process_time() - t0) / steps
+            pb.disconnect(c)
+            lines.append(f"{n:3d} rods in one world: {1e6 * per_step:7.1f} us per step, "
+                         f"{1e6 * per_step / n:5.1f} us per rod and step (CPU time)")
+            n *= 2
+    finally:
+        os.unlink(path)
+    return lines
 
 
 def set_solver(world: FishingWorld, solver: str, sweeps: int = 50) -> None:
