@@ -119,6 +119,8 @@ def main(argv: list[str] | None = None) -> int:
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--worlds", nargs="+", default=["arm-20"], choices=list(ARMS))
     p.add_argument("--seeds", type=int, default=10)
+    p.add_argument("--first-seed", type=int, default=0,
+                   help="seeds first-seed .. first-seed + seeds - 1 (more seeds of a comparison)")
     p.add_argument("--movements", type=int, default=5000)
     p.add_argument("--after", type=int, default=2500, metavar="MOVEMENT",
                    help="the oracle chooses goals from this movement on (uniform before)")
@@ -130,17 +132,19 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a LearnerConfig field for every run (repeatable)")
     a = p.parse_args(argv)
-    if a.seeds < 2 or a.movements < 1 or a.jobs < 1 or a.every < 1:
-        p.error("--seeds must be >= 2, --movements, --every and --jobs >= 1")
+    if a.seeds < 2 or a.movements < 1 or a.jobs < 1 or a.every < 1 or a.first_seed < 0:
+        p.error("--seeds must be >= 2, --movements, --every and --jobs >= 1, --first-seed >= 0")
     if not 0 <= a.after < a.movements:
         p.error("--after must be in [0, --movements)")
     if not (a.power >= 0 and np.isfinite(a.power)):
         p.error("--power must be a finite number >= 0")
     overrides = bl.parse_set(a.set)
     jobs = [(w, k, s, a.movements, overrides, a.after, a.every, a.power)
-            for w in a.worlds for k in (UNIFORM, ORACLE) for s in range(a.seeds)]
+            for w in a.worlds for k in (UNIFORM, ORACLE)
+            for s in range(a.first_seed, a.first_seed + a.seeds)]
     print(f"random-goals against goals drawn by the learner's own error (oracle) from movement "
-          f"{a.after} on, every {a.every}, power {a.power:g}; {a.seeds} seeds x {a.movements} "
+          f"{a.after} on, every {a.every}, power {a.power:g}; seeds {a.first_seed}-"
+          f"{a.first_seed + a.seeds - 1} x {a.movements} "
           f"movements, validation goals, overrides: {overrides or 'none'}")
     start = time.perf_counter()
     with ProcessPoolExecutor(a.jobs, initializer=bl._init, initargs=(a.worlds,)) as pool:

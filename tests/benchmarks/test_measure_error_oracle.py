@@ -66,7 +66,7 @@ def test_power_zero_is_uniform_over_reached_cells():
 def test_bad_options_are_refused():
     script = str(REPO / "benchmarks" / "measure_error_oracle.py")
     for args, word in ((["--after", "5000"], "--after"), (["--power", "-1"], "--power"),
-                       (["--every", "0"], "--every")):
+                       (["--every", "0"], "--every"), (["--first-seed", "-1"], "--first-seed")):
         done = subprocess.run([PYTHON, script, *args], capture_output=True, text=True,
                               timeout=120)
         assert done.returncode == 2 and word in done.stderr, (args, done.stderr)
