@@ -21,6 +21,7 @@ import pstats
 import time
 
 import numpy as np
+import pybullet as pb
 
 from sim_bridge.fishing_world import FishingWorld, _quiet_c_stdout
 
@@ -75,44 +76,27 @@ def main(argv: list[str] | None = None) -> None:
 
 
 def shared_world_steps(most: int, steps: int = 2000) -> list[str]:
-    """Bare stepSimulation time with 1, 2, 4, ... ``most`` rods side by side in one world,
-    built as FishingWorld builds its one (same solver, sweeps and time step), at rest."""
-    import os
-    import tempfile
+    """Bare stepSimulation time with 1, 2, 4, ... ``most`` rods in one world, at rest. Each
+    rod is built by FishingWorld's own construction (its solver, gravity, freed passive
+    joints) in the same physics client; the model has no collision shapes, so the rods do
+    not touch."""
+    from sim_bridge.rod_urdf import RodSpec
 
-    import pybullet as pb
-
-    from sim_bridge.fishing_world import DEFAULT_TIME_STEP, SOLVER_ITERATIONS
-    from sim_bridge.rod_urdf import RodSpec, build_urdf
-
-    fd, path = tempfile.mkstemp(suffix=".urdf", prefix="shared_world_")
-    with os.fdopen(fd, "w") as f:
-        f.write(build_urdf(RodSpec()))
     lines, n = [], 1
-    try:
-        while n <= most:
-            c = pb.connect(pb.DIRECT)
-            pb.setPhysicsEngineParameter(fixedTimeStep=DEFAULT_TIME_STEP, numSubSteps=0,
-                                         physicsClientId=c)
-            with _quiet_c_stdout():
-                pb.setPhysicsEngineParameter(constraintSolverType=pb.CONSTRAINT_SOLVER_LCP_PGS,
-                                             numSolverIterations=SOLVER_ITERATIONS,
-                                             physicsClientId=c)
-            for i in range(n):
-                pb.loadURDF(path, basePosition=[10.0 * i, 0.0, 0.0], useFixedBase=True,
-                            flags=pb.URDF_USE_INERTIA_FROM_FILE, physicsClientId=c)
+    while n <= most:
+        with FishingWorld(seed=0) as world:
+            for _ in range(n - 1):
+                world._build(RodSpec())
+            c = world._client
             for _ in range(50):
                 pb.stepSimulation(c)
             t0 = time.process_time()
             for _ in range(steps):
                 pb.stepSimulation(c)
             per_step = (time.process_time() - t0) / steps
-            pb.disconnect(c)
-            lines.append(f"{n:3d} rods in one world: {1e6 * per_step:7.1f} us per step, "
-                         f"{1e6 * per_step / n:5.1f} us per rod and step (CPU time)")
-            n *= 2
-    finally:
-        os.unlink(path)
+        lines.append(f"{n:3d} rods in one world: {1e6 * per_step:7.1f} us per step, "
+                     f"{1e6 * per_step / n:5.1f} us per rod and step (CPU time)")
+        n *= 2
     return lines
 
 
@@ -120,8 +104,6 @@ def set_solver(world: FishingWorld, solver: str, sweeps: int = 50) -> None:
     """Switch a built world's constraint solver: ``dantzig`` (MLCP solved by Dantzig's
     pivoting) or ``pgs`` (MLCP with ``sweeps`` projected Gauss-Seidel sweeps); the rest state
     is saved again, as each cast restores it."""
-    import pybullet as pb
-
     kind = {"dantzig": pb.CONSTRAINT_SOLVER_LCP_DANTZIG, "pgs": pb.CONSTRAINT_SOLVER_LCP_PGS}
     with _quiet_c_stdout():  # pybullet prints "switched solver" from C
         pb.setPhysicsEngineParameter(constraintSolverType=kind[solver],

@@ -4,16 +4,16 @@ A diagnostic of issue 10's "SAGG-RIAC better than random goals on the 20-joint a
 (docs/learners.md, 4e). SAGG-RIAC can only beat random goals by placing its goals better. This
 gives random-goals the best placement an interest could hope to find, from an oracle no learner
 has: from movement ``--after`` on, every ``--every`` movements, the learner's noise-free error
-is measured at one reachable point per reachable cell of the benchmark's 40 x 40 reach map
-(the cell's centre, or a reached point of it), and goals are drawn in those cells with a
-probability proportional to that error to the power ``--power`` (1: where it errs most, 0:
-uniform over reachable cells), uniformly inside the cell. Before ``--after``, goals are the
+is measured at the centre of each reachable cell of the benchmark's 40 x 40 reach map, and
+goals are drawn in those cells with a probability proportional to that error to the power
+``--power`` (1: where it errs most, 0: uniform over reachable cells), uniformly inside the
+cell. Before ``--after``, goals are the
 learner's own (uniform in the box: the frontier-pushing that measure_goal_band.py showed is
 needed early). If even this oracle does no better than random goals, goal placement is not
 what stands between SAGG-RIAC and a lower error on that arm: the lower level is.
 
 Validation goals, 5000 movements; the oracle's probe points are neither validation nor
-benchmark goals (cell centres of a finer grid).
+benchmark goals (centres of the reach map's cells, a finer grid than the benchmark's).
 
 Run:  .venv/bin/python benchmarks/measure_error_oracle.py                     (arm-20, ~6 min)
       .venv/bin/python benchmarks/measure_error_oracle.py --after 1000 --power 2

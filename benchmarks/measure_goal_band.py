@@ -49,7 +49,7 @@ def band(reach: ReachMap, margin: float) -> ReachMap:
     return ReachMap(reach.low, reach.high, distance <= margin)
 
 
-def one_run(job: tuple[str, float, int, int, dict]) -> dict:
+def one_run(job: tuple[str, float, int, int, dict, int]) -> dict:
     name, margin, seed, movements, overrides, after = job
     allowed = band(bl.REACH[name], margin)  # each worker's map, made once (bl._init)
     world = build_world(name, seed)
