@@ -343,7 +343,7 @@ class FishingWorld:
         pos, vel = np.array(ls[4]), np.array(ls[6])
         t_rel = n_steps * dt
         if not (np.all(np.isfinite(pos)) and np.all(np.isfinite(vel))
-                and np.linalg.norm(vel) < MAX_SPEED):
+                and math.sqrt(float((vel * vel).sum())) < MAX_SPEED):
             return CastResult(status=Status.PHYSICS_FAILURE, message="state exploded at release")
         hit = free_flight_touch(pos, vel, WATER_Z, AIR_DRAG, GRAVITY, TIME_LIMIT - t_rel)
         if hit is None or t_rel + hit[0] > TIME_LIMIT:

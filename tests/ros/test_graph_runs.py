@@ -12,11 +12,21 @@ import pytest
 
 from sgim_nodes.core.config import LearnerConfig
 from tests.conftest import REPO
+from tests.golden_runs import (
+    DIGESTS,
+    EVAL_EVERY,
+    MOVEMENTS,
+    PERIOD,
+    SEED,
+    TOLERANCE,
+    bag_digest,
+    runner_digest,
+    runner_records,
+)
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
 RUN = str(REPO / "ros_ws" / "run_experiment.sh")
-MOVEMENTS, EVAL_EVERY, PERIOD, SEED = 300, 100, 50, 2
 IMITATIONS = LearnerConfig().imitation_count
 
 
@@ -38,25 +48,12 @@ def finish(child, tmp_path, learner, timeout=330):
     return load_run(tmp_path / learner / "bag")
 
 
-# sgim-d runs with a lenient teacher (the default rule, "ability": the learner's inverse model
-# cast for a goal in the teacher's own world lands within 8 noise units of it): at some turn
-# every teaching goal is within reach and the teacher shows nothing (seed 2: the turn at 200;
-# it teaches again at 250, when a cast misses). Its turns without a demonstration, and the
-# teacher's casts in its own world, must still match the runner.
-TOLERANCE = {"sgim-d": 8.0, "demo-only": 0.7}  # in units of the outcome noise (0.07)
-
-
-def run_single_process(learner, seed=SEED, **teacher):
-    from sgim_nodes.core.learners import make_learner
-    from sgim_nodes.core.runner import build_world, run
-
-    world = build_world("fishing", seed)
-    learner_ = make_learner(learner, world.env.action_dim, world.env.outcome_dim, seed,
-                            scale=world.scale)
-    records: list[dict] = []
-    run(learner_, world, MOVEMENTS, EVAL_EVERY, seed, records.append, teacher_period=PERIOD,
-        teacher_tolerance_noise=TOLERANCE.get(learner, 1.0), **teacher)
-    return records
+# The runs are tests/golden_runs.py's. sgim-d runs with a lenient teacher (the default rule,
+# "ability": the learner's inverse model cast for a goal in the teacher's own world lands
+# within 8 noise units of it): at some turns every teaching goal is within reach and the
+# teacher shows nothing. Its turns without a demonstration, and the teacher's casts in its own
+# world, must still match the runner.
+run_single_process = runner_records
 
 
 def test_the_teachers_choice_rule_through_the_graph(ros_processes, ros_domain, tmp_path):
@@ -291,10 +288,12 @@ def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner)
     if learner == "random":
         assert set(processes) == {Movement.PROCESS_RANDOM}
 
-    # The graph is the single-process learner, movement for movement.
+    # The graph is the single-process learner, movement for movement, and both make the
+    # reference run of every machine (tests/golden_runs.py, core/portable.py).
     records = run_single_process(learner)
     moves = [r for r in records if r["type"] == "movement"]
     assert len(moves) == MOVEMENTS
+    assert bag_digest(run.movements) == runner_digest(records) == DIGESTS[learner]
     for graph_move, move in zip(run.movements, moves, strict=True):
         assert np.array_equal(graph_move.action, np.asarray(move["action"])), graph_move.index
     evaluations = [r["mean_distance"] for r in records if r["type"] == "evaluation"]

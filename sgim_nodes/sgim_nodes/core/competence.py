@@ -28,6 +28,8 @@ import math
 
 import numpy as np
 
+from . import portable
+
 
 def competence(goal: np.ndarray, best_outcome: np.ndarray | None, start_distance: float,
                success_tolerance: float, floor: float | None = None) -> float:
@@ -36,7 +38,7 @@ def competence(goal: np.ndarray, best_outcome: np.ndarray | None, start_distance
     noise of the goal, a miss by a noise unit must not count as total failure."""
     if best_outcome is None:
         return -1.0
-    d = float(np.linalg.norm(np.asarray(best_outcome, float) - np.asarray(goal, float)))
+    d = portable.norm(np.asarray(best_outcome, float) - np.asarray(goal, float))
     excess = max(0.0, d - success_tolerance)
     if excess == 0.0:
         return 0.0
@@ -53,4 +55,4 @@ def start_distance(closest_distance: float, goal: np.ndarray, centre: np.ndarray
     well be)."""
     if math.isfinite(closest_distance):
         return float(closest_distance)
-    return float(np.linalg.norm(np.asarray(goal, float) - np.asarray(centre, float)))
+    return portable.norm(np.asarray(goal, float) - np.asarray(centre, float))

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import portable
 from .environment import Environment, ResultLike, is_success
 
 # The evaluator's world gets the run's seed plus this, so its noise stream is the same in the
@@ -66,7 +67,7 @@ class Evaluator:
             point = landing_point(self.env.execute(np.asarray(inverse(goal), dtype=float)))
             if point is not None:
                 reached[i] = point
-                dist[i] = np.linalg.norm(reached[i] - goal)
+                dist[i] = portable.norm(reached[i] - goal)
             else:
                 failed[i] = True
                 dist[i] = self.failure_distance

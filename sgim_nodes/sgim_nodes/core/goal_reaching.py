@@ -24,6 +24,7 @@ import math
 
 import numpy as np
 
+from . import portable
 from .competence import start_distance
 from .config import Distances, LearnerConfig
 from .environment import ResultLike, is_success
@@ -133,7 +134,7 @@ class GoalAttempt:
         outcome = None
         if is_success(result):
             outcome = np.asarray(result.outcome, dtype=float)
-            cost = float(np.linalg.norm(outcome - self.goal))
+            cost = portable.norm(outcome - self.goal)
             if cost < self.best_distance:
                 self.best_distance, self.best_outcome = cost, outcome.copy()
                 self._since_best = 0

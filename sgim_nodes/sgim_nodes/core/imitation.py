@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import portable
 from .environment import ResultLike, is_success
 
 IMITATION = "imitation"
@@ -19,7 +20,7 @@ def perturb(action: np.ndarray, epsilon: float, rng: np.random.Generator) -> np.
     """action + a_rand, a_rand uniform in the open Euclidean ball of radius epsilon, clipped."""
     action = np.asarray(action, dtype=float)
     direction = rng.standard_normal(action.shape)
-    norm = np.linalg.norm(direction)
+    norm = portable.norm(direction)
     if norm == 0.0:
         return np.clip(action, -1.0, 1.0)
     radius = epsilon * (1.0 - rng.random()) ** (1.0 / action.size)  # in (0, eps]
@@ -57,7 +58,7 @@ class Imitation:
         self.movements += 1
         if is_success(result) and self.goal is not None:
             outcome = np.asarray(result.outcome, dtype=float)
-            d = float(np.linalg.norm(outcome - self.goal))
+            d = portable.norm(outcome - self.goal)
             if d < self.best_distance:
                 self.best_distance, self.best_outcome = d, outcome.copy()
         if self.movements >= self.count:

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import local_model
+from . import local_model, portable
 from .fit_cache import FitCache
 from .memory import Memory
 
@@ -116,7 +116,7 @@ class InverseModel:
                 action, predicted = local_model.step(fit, goal, self.local_step,
                                                      self.step_support)
                 # A flat or undetermined fit predicts (almost) no change: then stay put.
-                if (np.linalg.norm(predicted - fit.outcome) > 0.05 * score
+                if (portable.norm(predicted - fit.outcome) > 0.05 * score
                         and self._step_is_evidenced(fit, score, goal, predicted)):
                     return InverseEstimate(action, index, score, predicted)
         return InverseEstimate(mem.actions[index].copy(), index, score, outcome)
@@ -127,7 +127,7 @@ class InverseModel:
         ``unmoved_distance``: the fit's prediction at its centre to the goal (the rank score)."""
         if self.noise_rms is None:
             return True
-        gain = unmoved_distance - float(np.linalg.norm(predicted - goal))
+        gain = unmoved_distance - portable.norm(predicted - goal)
         return gain > fit.misfit(self.noise_rms)
 
     def best_predicted(self, goal: np.ndarray
@@ -143,7 +143,7 @@ class InverseModel:
             if fit is not None and fit.n_effective < self.rank_min_casts:
                 fit = None  # too few casts to predict better than the stored outcome
             predicted = mem.outcomes[i] if fit is None else fit.outcome
-            d = float(np.linalg.norm(predicted - goal))
+            d = portable.norm(predicted - goal)
             if best is None or d < best[1]:
                 best = (int(i), d, np.array(predicted, dtype=float), fit)
         assert best is not None

@@ -16,11 +16,13 @@ the true Jacobian was 0.1 on the 20-joint arm); the ridge keeps it small off tho
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
+from . import portable
 from .memory import Memory
 
 RIDGE = 1e-2
@@ -49,8 +51,9 @@ class LocalFit:
         the weighted hat matrix, without refitting; the ridge rows are a prior, never left
         out."""
         d, w = self.design, self.weights
-        gram = d.T @ d + np.diag(np.r_[0.0, np.full(d.shape[1] - 1, self.ridge)])
-        hat = np.einsum("ij,ji->i", d, np.linalg.solve(gram, d.T))
+        gram = portable.matmul(d.T, d) + np.diag(np.r_[0.0, np.full(d.shape[1] - 1,
+                                                                     self.ridge)])
+        hat = (d * portable.solve_spd(gram, d.T).T).sum(axis=1)
         loo = self.residuals / np.maximum(1.0 - hat, 1e-9)[:, None]
         return float(np.sqrt((w * (loo**2).sum(1)).sum() / w.sum()))
 
@@ -58,7 +61,8 @@ class LocalFit:
         """Weighted rms offset of the fit's actions from its centre along ``direction`` (a unit
         vector): how far out, that way, the fit has casts to stand on."""
         offsets = self.design[:, 1:]  # sqrt(w) * (a_i - a_c)
-        return float(np.linalg.norm(offsets @ direction) / np.sqrt(self.weights.sum()))
+        return portable.norm(portable.matmul(offsets, direction)) / math.sqrt(
+            self.weights.sum())
 
     def misfit(self, noise_rms: float) -> float:
         """The held-out error beyond the world's noise (rms distance of one cast from its
@@ -77,7 +81,7 @@ def fit(memory: Memory, centre: np.ndarray, radius: float, max_pairs: int) -> Lo
     centre = np.asarray(centre, dtype=float)
     x = memory.actions[idx] - centre
     y = memory.outcomes[idx]
-    w = np.exp(-0.5 * (dist / (0.5 * radius)) ** 2)
+    w = portable.exp(-0.5 * (dist / (0.5 * radius)) ** 2)
     sw = np.sqrt(w)[:, None]
     n_act = x.shape[1]
     design = np.hstack([np.ones((len(idx), 1)), x]) * sw
@@ -85,13 +89,14 @@ def fit(memory: Memory, centre: np.ndarray, radius: float, max_pairs: int) -> Lo
     lam = RIDGE * max(spread, 1e-12)
     # The ridge-regularised normal equations: the ridge keeps the Gram matrix well conditioned
     # (the intercept column is never zero-weighted), and a solve is a fraction of lstsq's SVD.
-    gram = design.T @ design
+    gram = portable.matmul(design.T, design)
     gram[np.arange(1, n_act + 1), np.arange(1, n_act + 1)] += lam
-    beta = np.linalg.solve(gram, design.T @ (y * sw))
+    beta = portable.solve_spd(gram, portable.matmul(design.T, y * sw))
     b, jac = beta[0], beta[1:].T
-    resid = y - (b + x @ jac.T)
+    resid = y - (b + portable.matmul(x, jac.T))
     rms = float(np.sqrt((w * (resid**2).sum(1)).sum() / w.sum()))
-    return LocalFit(centre, b, jac, float(w.sum() ** 2 / (w**2).sum()), rms, design, lam,
+    total = float(w.sum())
+    return LocalFit(centre, b, jac, total * total / float((w * w).sum()), rms, design, lam,
                     resid, w)
 
 
@@ -103,14 +108,12 @@ def step(model: LocalFit, goal: np.ndarray, radius: float,
     them it extrapolates), clipped to [-1, 1]; with the outcome the model predicts for it."""
     jac = model.jacobian
     gap = np.asarray(goal, dtype=float) - model.outcome
-    gram = jac @ jac.T
-    mu = 1e-9 * max(float(np.trace(gram)), 1e-12)
-    delta = jac.T @ np.linalg.solve(gram + mu * np.eye(len(gram)), gap)
-    norm = float(np.linalg.norm(delta))
+    delta = portable.minimum_norm_step(jac, gap)
+    norm = portable.norm(delta)
     limit = radius if radius > 0.0 else np.inf
     if support > 0.0 and norm > 0.0:
         limit = min(limit, support * model.spread_along(delta / norm))
     if norm > limit:
         delta *= limit / norm
     action = np.clip(model.centre + delta, -1.0, 1.0)
-    return action, model.outcome + jac @ (action - model.centre)
+    return action, model.outcome + portable.matmul(jac, action - model.centre)

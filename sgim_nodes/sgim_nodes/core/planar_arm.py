@@ -20,8 +20,8 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from scipy import optimize
 
+from . import portable
 from .environment import MovementResult, Status
 from .scale import WorldScale, gaussian_noise_2d
 
@@ -56,7 +56,16 @@ class PlanarArm:
         a = np.clip(np.asarray(actions, dtype=float), -1.0, 1.0)
         angles = np.cumsum(a * self.max_angle, axis=-1)
         n = a.shape[-1]
-        return np.stack([np.cos(angles).sum(-1), np.sin(angles).sum(-1)], axis=-1) / n
+        return np.stack([portable.cos(angles).sum(-1), portable.sin(angles).sum(-1)],
+                        axis=-1) / n
+
+    def jacobian(self, action: np.ndarray) -> np.ndarray:
+        """d forward / d action at one action (2, n): joint k turns every link from k on."""
+        a = np.clip(np.asarray(action, dtype=float), -1.0, 1.0)
+        angles = np.cumsum(a * self.max_angle)
+        tail = lambda v: np.cumsum(v[::-1])[::-1]  # noqa: E731  sum over links j >= k
+        scale = self.max_angle / len(a)
+        return np.stack([-tail(portable.sin(angles)), tail(portable.cos(angles))]) * scale
 
     def execute(self, action: np.ndarray) -> MovementResult:
         action = np.asarray(action, dtype=float)
@@ -114,19 +123,57 @@ SOLVED = 1e-6
 """A point counts as reachable when least squares on the noise-free arm lands this close."""
 
 
+MAX_STEPS = 100
+"""Gauss-Newton steps per start of ``solve``: a reachable goal is met in a handful."""
+
+
 def solve(arm: PlanarArm, goal: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, float]:
-    """The best action least squares finds for ``goal`` from each start (bounded to the action
-    box), and its noise-free distance to the goal."""
-    best, best_err = np.asarray(starts[0], float), np.inf
+    """The best action found for ``goal`` from each start, and its noise-free distance to
+    the goal: Gauss-Newton's smallest step to the goal (the arm is redundant), halved until it
+    gets closer, kept in the action box. Computed with core/portable.py, so the arms' goals
+    and teaching sets are the same on every CPU (scipy's least squares rounded by CPU)."""
+    goal = np.asarray(goal, dtype=float)
+    best, best_err = np.clip(np.asarray(starts[0], float), -1.0, 1.0), np.inf
     for x0 in starts:
-        res = optimize.least_squares(lambda a: arm.forward(a) - goal, x0, bounds=(-1.0, 1.0),
-                                     max_nfev=100 * arm.action_dim)
-        err = float(np.linalg.norm(arm.forward(res.x) - goal))
+        x = np.clip(np.asarray(x0, dtype=float), -1.0, 1.0)
+        err = portable.norm(arm.forward(x) - goal)
+        for _ in range(MAX_STEPS):
+            if err < 0.1 * SOLVED:
+                break
+            delta = _bounded_step(arm.jacobian(x), goal - arm.forward(x), x)
+            length = 1.0
+            while length > 1e-6:
+                trial = np.clip(x + length * delta, -1.0, 1.0)
+                trial_err = portable.norm(arm.forward(trial) - goal)
+                if trial_err < err:
+                    x, err = trial, trial_err
+                    break
+                length *= 0.5
+            else:
+                break  # no step gets closer: a local minimum or the box's edge
         if err < best_err:
-            best, best_err = res.x, err
+            best, best_err = x, err
         if best_err < SOLVED:
             break
     return best, best_err
+
+
+def _bounded_step(jac: np.ndarray, gap: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Gauss-Newton's smallest step towards ``gap`` that moves no joint held at a bound of
+    the box further out: such joints are dropped from the step until none is left that the
+    step would push out (an active set)."""
+    free = np.ones(len(x), dtype=bool)
+    delta = np.zeros(len(x))
+    for _ in range(len(x)):
+        if free.sum() < len(gap):
+            break
+        delta = np.zeros(len(x))
+        delta[free] = portable.minimum_norm_step(jac[:, free], gap)
+        out = free & (((x >= 1.0) & (delta > 0.0)) | ((x <= -1.0) & (delta < 0.0)))
+        if not out.any():
+            break
+        free &= ~out
+    return delta
 
 
 @dataclass(frozen=True)

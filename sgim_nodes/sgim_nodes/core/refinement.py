@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from . import local_model
+from . import local_model, portable
 from .memory import Memory
 from .nelder_mead import AskTellNelderMead
 
@@ -63,11 +63,11 @@ class LocalLinearSearch(_Search):
         fit = local_model.fit(self.memory, centre, 2.0 * self.radius, self.neighbours)
         if fit is not None:
             action, _ = local_model.step(fit, self.goal, self.radius)
-            if np.linalg.norm(action - centre) > 1e-3 * self.radius:
+            if portable.norm(action - centre) > 1e-3 * self.radius:
                 return action
         # No model yet, or it says stay: probe a random direction at the trust radius.
         direction = self.rng.standard_normal(self.best_action.shape)
-        direction *= self.radius / max(float(np.linalg.norm(direction)), 1e-12)
+        direction *= self.radius / max(portable.norm(direction), 1e-12)
         return np.clip(centre + direction, -1.0, 1.0)
 
     last = None
@@ -137,7 +137,7 @@ class SubspaceSearch(_Search):
         self.start_outcome = None if start_outcome is None else np.asarray(start_outcome, float)
         n = len(self.origin)
         m = min(n_probes, n)
-        q, _ = np.linalg.qr(rng.standard_normal((n, m)))
+        q = portable.orthonormal_columns(rng.standard_normal((n, m)))
         self.basis = q  # (n, m), orthonormal columns
         self.coords: list[np.ndarray] = []
         self.outcomes: list[np.ndarray] = []
@@ -154,7 +154,7 @@ class SubspaceSearch(_Search):
         c = np.array(self.coords)
         y = np.array(self.outcomes)
         design = np.hstack([np.ones((len(c), 1)), c])
-        beta, *_ = np.linalg.lstsq(design, y, rcond=None)
+        beta = portable.least_squares(design, y)
         return beta[0], beta[1:].T, c  # b, M (outcome, m), coordinates of the casts
 
     def ask(self) -> np.ndarray:
@@ -162,19 +162,17 @@ class SubspaceSearch(_Search):
             return self._queue[0].copy()
         m = self.basis.shape[1]
         if len(self.coords) < m + 1:  # probes failed (no outcome): probe around the best
-            direction = self.basis @ np.roll(np.eye(m)[0], len(self.coords))
+            direction = self.basis[:, len(self.coords) % m]
             return np.clip(self.best_action + self.probe * direction, -1.0, 1.0)
         b, mat, c = self._model()
-        predicted = b + c @ mat.T
+        predicted = b + portable.matmul(c, mat.T)
         ref = c[int(np.argmin(np.linalg.norm(predicted - self.goal, axis=1)))]
-        gap = self.goal - (b + mat @ ref)
-        gram = mat @ mat.T
-        mu = 1e-9 * max(float(np.trace(gram)), 1e-12)
-        delta = mat.T @ np.linalg.solve(gram + mu * np.eye(len(gram)), gap)
-        norm = float(np.linalg.norm(delta))
+        gap = self.goal - (b + portable.matmul(mat, ref))
+        delta = portable.minimum_norm_step(mat, gap)
+        norm = portable.norm(delta)
         if norm > self.radius:
             delta *= self.radius / norm
-        return np.clip(self.origin + self.basis @ (ref + delta), -1.0, 1.0)
+        return np.clip(self.origin + portable.matmul(self.basis, ref + delta), -1.0, 1.0)
 
     def tell_outcome(self, action: np.ndarray, outcome, cost: float) -> bool:
         probing = bool(self._queue)
@@ -183,11 +181,11 @@ class SubspaceSearch(_Search):
         action = np.asarray(action, float)
         if outcome is not None:
             outcome = np.asarray(outcome, float)
-            self.coords.append(self.basis.T @ (action - self.origin))
+            self.coords.append(portable.matmul(self.basis.T, action - self.origin))
             self.outcomes.append(outcome)
             if probing and self.scale is not None and self.start_outcome is not None:
-                self.scale.observe(float(np.linalg.norm(action - self.origin)),
-                                   float(np.linalg.norm(outcome - self.start_outcome)))
+                self.scale.observe(portable.norm(action - self.origin),
+                                   portable.norm(outcome - self.start_outcome))
         improved = super().tell(action, cost)
         if not probing:
             self.radius *= 1.5 if cost < self.last_cost else 0.6
@@ -225,7 +223,7 @@ class NelderMeadSearch(_Search):
         n = len(start_action)
         chosen = [int(i) for i in memory.nearest(goal, n)[1]][:n]
         verts = [memory.actions[i].copy() for i in chosen]
-        values: list[float | None] = [float(np.linalg.norm(memory.outcomes[i] - goal))
+        values: list[float | None] = [portable.norm(memory.outcomes[i] - goal)
                                       for i in chosen]
         axis = 0
         while len(verts) < n:

@@ -21,6 +21,8 @@ from typing import Any
 
 import numpy as np
 
+from . import portable
+
 
 def gaussian_noise_2d(sigma: float) -> float:
     """The paper's noise measure for isotropic 2-D Gaussian noise: E|N(0, sigma^2 I)|."""
@@ -84,7 +86,7 @@ class WorldScale:
     @property
     def diagonal(self) -> float:
         """The largest distance between two points of the box."""
-        return float(np.linalg.norm(self.high_array - self.low_array))
+        return portable.norm(self.high_array - self.low_array)
 
     def clip(self, point: np.ndarray) -> np.ndarray:
         return np.clip(np.asarray(point, dtype=float), self.low_array, self.high_array)

@@ -44,6 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import portable
 from .environment import Environment
 from .evaluator import landing_point
 
@@ -183,7 +184,7 @@ def cast_distance(inverse: Callable[[np.ndarray], np.ndarray],
     infinitely far."""
     def distance(goal: np.ndarray) -> float:
         point = landing_point(world.execute(np.asarray(inverse(goal), dtype=float)))
-        return np.inf if point is None else float(np.linalg.norm(point - goal))
+        return np.inf if point is None else portable.norm(point - goal)
 
     return distance
 

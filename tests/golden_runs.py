@@ -1,0 +1,70 @@
+"""Digests of reference runs whose movements must be the same on every x86-64 machine.
+
+The settings are those of tests/ros/test_graph_runs.py (fishing, 300 movements, evaluations
+every 100, the teacher every 50), seed 0; the runner makes them in
+tests/core/test_portable_runs.py, the graph in test_graph_runs.py, and both must give these
+digests bit for bit, whatever CPU model, BLAS kernel or numpy SIMD level runs them
+(core/portable.py). A change of the learner or the world that changes its movements changes
+them: update them in the same commit, with the reason.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Iterable, Sequence
+
+import numpy as np
+
+SEED = 0
+MOVEMENTS, EVAL_EVERY, PERIOD = 300, 100, 50
+TOLERANCE = {"sgim-d": 8.0, "demo-only": 0.7}
+"""The teacher's tolerance, in noise units, per learner (test_graph_runs.py says why)."""
+
+DIGESTS = {
+    "sgim-d": "f87aa545c3d6db340c0c",
+    "saggriac": "6af00d45a8d7200a00b4",
+    "random-goals": "69b3abdbeb0aa572dc30",
+    "demo-only": "e3a39d15b62b38e8889d",
+    "random": "de0dad0164916d79d6c8",
+}
+
+
+def movements_digest(moves: Iterable[tuple[Sequence[float], int, int, Sequence[float] | None]]
+                     ) -> str:
+    """sha256 of (action, process, status, outcome) of every movement, in order; the outcome
+    only when the status says the movement gave one."""
+    h = hashlib.sha256()
+    for action, process, status, outcome in moves:
+        h.update(np.asarray(action, dtype="<f8").tobytes())
+        h.update(bytes([int(process), int(status)]))
+        if int(status) == 0:
+            h.update(np.asarray(outcome, dtype="<f8").tobytes())
+    return h.hexdigest()[:20]
+
+
+def runner_digest(records: list[dict]) -> str:
+    """The digest of a runner's records (core/runner.py)."""
+    from sgim_nodes.core.environment import PROCESS_CODES
+
+    return movements_digest(
+        (r["action"], PROCESS_CODES[r["label"]], r["status"], r["outcome"])
+        for r in records if r["type"] == "movement")
+
+
+def bag_digest(movements) -> str:
+    """The digest of a bag's Movement records."""
+    return movements_digest((m.action, m.process, m.status, m.outcome) for m in movements)
+
+
+def runner_records(learner: str, seed: int = SEED, **teacher) -> list[dict]:
+    """The runner's records of the reference run of ``learner``."""
+    from sgim_nodes.core.learners import make_learner
+    from sgim_nodes.core.runner import build_world, run
+
+    world = build_world("fishing", seed)
+    made = make_learner(learner, world.env.action_dim, world.env.outcome_dim, seed,
+                        scale=world.scale)
+    records: list[dict] = []
+    run(made, world, MOVEMENTS, EVAL_EVERY, seed, records.append, teacher_period=PERIOD,
+        teacher_tolerance_noise=TOLERANCE.get(learner, 1.0), **teacher)
+    return records
