@@ -264,6 +264,17 @@ class RunParameters:
                             if name != "/**"})
 
 
+def fingerprint(values: RunParameters, nodes: Iterable[NodeSpec]):
+    """The learner fingerprint of a run of these nodes with these values
+    (provenance/fingerprint.py: of every node, the read-only parameters that shape it)."""
+    from sgim_nodes.provenance.fingerprint import fingerprint as make
+    from sgim_nodes.provenance.fingerprint import graph_parameters
+
+    nodes = list(nodes)
+    read_only = {spec.name: [p.name for p in spec.params if p.read_only] for spec in nodes}
+    return make(graph_parameters(values.effective(nodes), read_only))
+
+
 def masked(values: Mapping[str, Any]) -> dict[str, Any]:
     """The values with every secret (the web teacher's token) replaced by a mark."""
     return {k: ("<set>" if v else "") if k in SECRETS else v for k, v in values.items()}

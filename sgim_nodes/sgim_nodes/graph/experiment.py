@@ -45,6 +45,7 @@ from sgim_nodes.graph.description import (
     RunOptions,
     RunParameters,
     check,
+    fingerprint,
     graph,
     masked,
     parameters,
@@ -144,6 +145,7 @@ def plan_new(args: argparse.Namespace) -> Plan:
         "started": datetime.now(UTC).isoformat(), "outcome": RUNNING,
         "launcher_pid": os.getpid(), "parameters": masked(values.shared),
         "node_parameters": values.effective(nodes), "versions": versions(),
+        "fingerprint": fingerprint(values, nodes).to_dict(),
     }
     if values.per_node:
         meta["per_node_parameters"] = {n: masked(v) for n, v in values.per_node.items()}
@@ -197,6 +199,9 @@ def plan_resume(args: argparse.Namespace) -> Plan | None:
         values = RunParameters(check(shared), values.per_node)
         entry = {"segment": segment.name, "at": datetime.now(UTC).isoformat(),
                  "from_movement": state.recorded}
+        entry.update(_fingerprint_then_and_now(run_dir, meta, values,
+                                               graph(learner, teacher,
+                                                     bool(meta.get("markers", True)))))
         if state.lost:
             entry["lost_movements"] = list(state.lost)
         meta.setdefault("resumed", []).append(entry)
@@ -209,6 +214,26 @@ def plan_resume(args: argparse.Namespace) -> Plan | None:
     except BaseException:
         lock.release()
         raise
+
+
+def _fingerprint_then_and_now(run_dir: Path, meta: dict[str, Any], values: RunParameters,
+                              nodes: list[NodeSpec]) -> dict[str, Any]:
+    """The resumed segment's fingerprint, and the fields in which it differs from the run's
+    first (the learner changed since: the run mixes two learners, and analyze refuses it)."""
+    from sgim_nodes.provenance.fingerprint import Fingerprint
+
+    now = fingerprint(values, nodes)
+    then = Fingerprint.from_dict(meta.get("fingerprint"))
+    entry: dict[str, Any] = {"fingerprint": now.value}
+    if then is None:
+        return entry
+    changed = then.differences(now)
+    if changed:
+        entry["fingerprint_changed"] = changed
+        say(f"note: the learner changed since {run_dir} began ({', '.join(changed)}): its "
+            "resumed part is made by another learner than its first, and analyze will not "
+            "pool it with unmixed runs")
+    return entry
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,0 +1,1 @@
+"""Where runs and figures come from: the learner fingerprint and the provenance block."""

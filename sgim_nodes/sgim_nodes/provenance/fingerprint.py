@@ -1,0 +1,210 @@
+"""The learner fingerprint: a hash of everything that can change a run's movements.
+
+Why: a figure is only worth what its runs are, and runs of another learner, world or library
+must never be pooled or reused as if they were alike. The fingerprint holds, each as a field
+of its own so that a difference can be named:
+
+- ``code``: the learner's core (sgim_nodes/core/*.py);
+- ``world``: the fishing world's modules (sim_bridge: the cast, the lake, the scaling, the
+  data loaders);
+- ``data``: the world's data files (map, benchmark goals, teaching set, floor), by content;
+- ``parameters``: the run's resolved parameters that shape it (``parameters`` below);
+- ``numpy``, ``scipy``, ``pybullet``, ``python``: the versions that compute it.
+
+Source files count by their syntax tree without docstrings, so a comment or a docstring does
+not make a page stale, while any change of code does. The graph's nodes are not in it: the
+graph = runner tests hold them to the core's movements. Nor is the machine: core/portable.py
+makes a seed give the same run on every x86-64 CPU (tests/golden_runs.py holds the proof), so
+reports name the machine but a figure made on one checks on another.
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import json
+import platform
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from functools import cache
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+ENVIRONMENT_FIELDS = ("code", "world", "data", "numpy", "scipy", "pybullet", "python")
+FIELDS = (*ENVIRONMENT_FIELDS, "parameters")
+LIBRARIES = ("numpy", "scipy", "pybullet")
+WORLD_MODULES = ("bezier", "data_files", "fishing_world", "lake", "rod_urdf", "scaling")
+"""The sim_bridge modules a cast runs through (not its node, renderer or tools)."""
+
+PER_RUN = frozenset({"seed", "output", "resume_from", "resume_segments", "storage",
+                     "wait_for_recorder", "movement_listeners", "ros_domain_id", "host",
+                     "port", "token", "address_file"})
+"""Parameters that differ between runs of one experiment without changing what the learner
+does: the seed (a run's identity, kept beside the fingerprint), where it writes, how its
+graph is wired and served."""
+SILENT_NODES = frozenset({"recorder", "markers"})
+"""Nodes that only record or draw: their parameters cannot change a movement."""
+
+
+def _digest(parts: Iterable[bytes], length: int = 16) -> str:
+    h = hashlib.sha256()
+    for part in parts:
+        h.update(hashlib.sha256(part).digest())
+    return h.hexdigest()[:length]
+
+
+def _without_docstrings(tree: ast.AST) -> ast.AST:
+    for node in ast.walk(tree):
+        body = getattr(node, "body", None)
+        if (isinstance(node, ast.Module | ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef)
+                and body and isinstance(body[0], ast.Expr)
+                and isinstance(body[0].value, ast.Constant)
+                and isinstance(body[0].value.value, str)):
+            node.body = body[1:] or [ast.Pass()]
+    return tree
+
+
+def source_digest(files: Iterable[Path]) -> str:
+    """The files' code, by name and syntax tree (comments and docstrings do not count)."""
+    parts = []
+    for file in sorted(files, key=lambda f: f.name):
+        tree = _without_docstrings(ast.parse(file.read_text(encoding="utf-8")))
+        parts.append(file.name.encode() + b"\0" + ast.dump(tree).encode())
+    return _digest(parts)
+
+
+def file_digest(path: Path) -> str:
+    """sha256 of a file's bytes (the first 16 hex digits)."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16]
+
+
+def core_files() -> list[Path]:
+    from sgim_nodes import core
+
+    return sorted(Path(core.__file__).parent.glob("*.py"))
+
+
+def world_files() -> list[Path]:
+    import sim_bridge
+
+    here = Path(sim_bridge.__file__).parent
+    return [here / f"{name}.py" for name in WORLD_MODULES]
+
+
+def data_files() -> dict[str, Path]:
+    """The world's data files by name."""
+    from sim_bridge import data_files as files
+
+    folder = files.data_dir()
+    return {name: folder / name for name in (files.REACHABLE_MAP, files.BENCHMARK_GOALS,
+                                             files.TEACHING_SET, files.BENCHMARK_FLOOR)}
+
+
+def library_versions() -> dict[str, str]:
+    found = {"python": platform.python_version()}
+    for dist in LIBRARIES:
+        try:
+            found[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            found[dist] = "absent"
+    return found
+
+
+@cache
+def environment() -> dict[str, str]:
+    """The fields every run of this checkout shares (computed once per process)."""
+    data = data_files()
+    return {"code": source_digest(core_files()), "world": source_digest(world_files()),
+            "data": _digest(f"{name}:{file_digest(path)}".encode()
+                            for name, path in sorted(data.items())),
+            **library_versions()}
+
+
+def canonical(value: Any) -> str:
+    """One text per value, whatever the order of mappings (JSON, keys sorted)."""
+    return json.dumps(value, sort_keys=True, separators=(",", ":"), default=str)
+
+
+@dataclass(frozen=True)
+class Fingerprint:
+    """The fields, and ``parameters``: what they were made from (to name a difference)."""
+
+    fields: Mapping[str, str]
+    parameters: Mapping[str, Any] = field(default_factory=dict, compare=False)
+
+    @property
+    def value(self) -> str:
+        return _digest(f"{k}={self.fields.get(k, '')}".encode() for k in FIELDS)
+
+    def differences(self, other: Fingerprint) -> list[str]:
+        """The fields that differ; for ``parameters``, the parameters that do, by name."""
+        out = [k for k in FIELDS if k != "parameters"
+               and self.fields.get(k) != other.fields.get(k)]
+        if self.fields.get("parameters") != other.fields.get("parameters"):
+            names = parameter_differences(self.parameters, other.parameters)
+            out.append(f"parameters ({', '.join(names)})" if names else "parameters")
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"value": self.value, "fields": dict(self.fields),
+                "parameters": dict(self.parameters)}
+
+    @classmethod
+    def from_dict(cls, data: Any) -> Fingerprint | None:
+        """Read back to_dict's mapping (None when absent or malformed: an older run)."""
+        if not isinstance(data, Mapping) or not isinstance(data.get("fields"), Mapping):
+            return None
+        fields_ = {str(k): str(v) for k, v in data["fields"].items()}
+        params = data.get("parameters")
+        return cls(fields_, dict(params) if isinstance(params, Mapping) else {})
+
+    def describe(self) -> str:
+        """One line: the value and its fields."""
+        shown = ", ".join(f"{k} {self.fields.get(k, '?')}" for k in FIELDS)
+        return f"{self.value} ({shown})"
+
+
+def parameter_differences(a: Mapping[str, Any], b: Mapping[str, Any]) -> list[str]:
+    """The parameter names whose values differ between a and b, once each: a graph run's
+    parameters are nested by node, and one value is read by several nodes; a node that only
+    one side has is named "node X"."""
+    out: list[str] = []
+    for key in sorted(set(a) | set(b)):
+        va, vb = a.get(key), b.get(key)
+        if isinstance(va, Mapping) and isinstance(vb, Mapping):
+            out += parameter_differences(va, vb)
+        elif isinstance(va, Mapping) != isinstance(vb, Mapping):
+            out.append(f"node {key}")
+        elif canonical(va) != canonical(vb):
+            out.append(str(key))
+    return list(dict.fromkeys(sorted(out)))
+
+
+def fingerprint(parameters: Mapping[str, Any]) -> Fingerprint:
+    """The fingerprint of a run of this checkout with these shaping parameters."""
+    params = json.loads(canonical(parameters))
+    return Fingerprint({**environment(), "parameters": _digest([canonical(params).encode()])},
+                       params)
+
+
+def graph_parameters(node_parameters: Mapping[str, Mapping[str, Any]],
+                     read_only: Mapping[str, Iterable[str]]) -> dict[str, dict[str, Any]]:
+    """The parameters of a graph run that shape its movements: of every node but the silent
+    ones, those it declares read-only (the ones it may change while it runs are timeouts),
+    less the per-run ones (PER_RUN). ``read_only``: node -> its read-only parameter names."""
+    out = {}
+    for node, values in node_parameters.items():
+        if node in SILENT_NODES:
+            continue
+        keep = set(read_only.get(node, ())) - PER_RUN
+        out[node] = {k: v for k, v in values.items() if k in keep}
+    return out
+
+
+def runner_parameters(env: str, learner: str, config: Mapping[str, Any],
+                      options: Mapping[str, Any]) -> dict[str, Any]:
+    """The parameters of a single-process run (core/runner.py): world, learner, every
+    LearnerConfig field and the runner's options (teacher, budget, evaluation)."""
+    return {"maker": "runner", "env": env, "learner": learner, "config": dict(config),
+            "options": dict(options)}

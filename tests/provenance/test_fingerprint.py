@@ -1,0 +1,95 @@
+"""The learner fingerprint: what changes a run changes it, and nothing else does."""
+
+from __future__ import annotations
+
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from sgim_nodes.provenance import fingerprint as fp
+from sgim_nodes.provenance.record import Provenance
+
+
+def _write(folder: Path, name: str, text: str) -> Path:
+    path = folder / name
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
+def test_source_digest_ignores_comments_and_docstrings_not_code(tmp_path):
+    base = '''\
+        """Module doc."""
+        def f(x):
+            """Doc."""
+            return x + 1  # a comment
+        '''
+    a = _write(tmp_path, "a.py", base)
+    first = fp.source_digest([a])
+    _write(tmp_path, "a.py", base.replace("Doc.", "Other words.").replace("a comment", "c"))
+    assert fp.source_digest([a]) == first
+    _write(tmp_path, "a.py", base.replace("x + 1", "x + 2"))
+    assert fp.source_digest([a]) != first
+    _write(tmp_path, "a.py", base)
+    b = _write(tmp_path, "b.py", "y = 1\n")
+    assert fp.source_digest([a, b]) != first  # a new module counts
+
+
+def test_environment_holds_code_world_data_and_versions():
+    env = fp.environment()
+    assert set(env) == set(fp.ENVIRONMENT_FIELDS)
+    assert all(len(env[k]) == 16 for k in ("code", "world", "data"))
+    import numpy
+
+    assert env["numpy"] == numpy.__version__
+
+
+def test_the_same_parameters_give_the_same_value_whatever_their_order():
+    a = fp.fingerprint({"x": 1, "nested": {"b": 2.0, "a": [1, 2]}})
+    b = fp.fingerprint({"nested": {"a": [1, 2], "b": 2.0}, "x": 1})
+    assert a.value == b.value and not a.differences(b)
+    c = fp.fingerprint({"x": 1, "nested": {"b": 2.5, "a": [1, 2]}})
+    assert c.value != a.value and a.differences(c) == ["parameters (b)"]
+
+
+def test_differences_name_the_fields_and_the_parameters():
+    a = fp.fingerprint({"node": {"zeta": 50, "seedless": 1}})
+    other_env = {**a.fields, "numpy": "1.0", "code": "0" * 16}
+    b = fp.Fingerprint({**other_env, "parameters": fp.fingerprint(
+        {"node": {"zeta": 20, "seedless": 1}, "teacher": {"p": 1}}).fields["parameters"]},
+        {"node": {"zeta": 20, "seedless": 1}, "teacher": {"p": 1}})
+    assert a.differences(b) == ["code", "numpy", "parameters (node teacher, zeta)"]
+    again = fp.Fingerprint.from_dict(b.to_dict())
+    assert again is not None and again.value == b.value and not again.differences(b)
+    assert fp.Fingerprint.from_dict(None) is None
+    assert fp.Fingerprint.from_dict({"value": "abc"}) is None
+
+
+@pytest.mark.ros
+def test_a_graph_runs_fingerprint_depends_on_what_shapes_it_only():
+    from sgim_nodes.graph.description import RunOptions, fingerprint, graph, parameters
+
+    def of(learner="sgim-d", **kw):
+        overrides = kw.pop("overrides", {})
+        options = RunOptions(learner, overrides=overrides, **kw)
+        return fingerprint(parameters(options), graph(learner))
+
+    base = of(seed=0, output="/tmp/a")
+    assert of(seed=7, output="/tmp/b", storage="sqlite3").value == base.value
+    assert of(seed=0, output="/tmp/a", overrides={"service_timeout": 99.0}).value == base.value
+    assert of(overrides={"zeta": 20}).differences(base) == ["parameters (zeta)"]
+    assert of(period=50).differences(base) == ["parameters (demonstration_period)"]
+    assert of(movements=1000).value != base.value
+    assert "node teacher" in of("saggriac").differences(base)[0]
+    # what it was made from is readable, by node, without the per-run names
+    assert "seed" not in base.parameters["low_level_explorer"]
+    assert base.parameters["low_level_explorer"]["zeta"] == 50
+
+
+def test_the_provenance_block_reads_back():
+    p = Provenance.now("ros_ws/reproduce.sh study", "study", "f" * 16, fp.environment(), 3725,
+                       ["a note"])
+    text = f"# Title\n\n{p.markdown()}\n\nprose"
+    assert Provenance.parse(text) == p
+    assert "1 h 02 min on" in text and "| note | a note |" in text
+    assert Provenance.parse("no block here") is None
