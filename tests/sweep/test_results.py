@@ -12,20 +12,24 @@ import yaml
 from sgim_nodes.bag.mcap_recovery import MAGIC
 from sgim_nodes.sweep import results, task
 from sgim_nodes.sweep.results import State, install, run_state
-from sgim_nodes.sweep.sweep_file import expand
+from sgim_nodes.sweep.sweep_file import expand, spec_fingerprint
 
 SPEC = expand({"learner": "sgim-d", "movements": 100, "seeds": [2], "period": 50,
                "param": {"imitation_count": 3}})[0]
 
 
 def make_run(folder: Path, outcome: str = "finished", movements: int = 100, closed: bool = True,
-             **overrides) -> Path:
-    """A run folder as run_experiment leaves it (metadata and one recording)."""
-    params = {**SPEC.expected_parameters(), **overrides}
+             fingerprint: dict | None = None, spec=None, **overrides) -> Path:
+    """A run folder as run_experiment leaves it (metadata and one recording), by default made
+    by this checkout's learner (the spec's fingerprint)."""
+    spec = spec or SPEC
+    params = {**spec.expected_parameters(), **overrides}
     (folder / "bag").mkdir(parents=True)
     (folder / "metadata.yaml").write_text(yaml.safe_dump(
         {"learner": params["learner"], "seed": params["seed"], "outcome": outcome,
-         "parameters": params}))
+         "parameters": params,
+         "fingerprint": spec_fingerprint(spec).to_dict() if fingerprint is None
+         else fingerprint}))
     (folder / "bag" / "bag.mcap").write_bytes(MAGIC + b"records" + (MAGIC if closed else b""))
     (folder / "bag" / "metadata.yaml").write_text(yaml.safe_dump({
         "rosbag2_bagfile_information": {
@@ -49,6 +53,37 @@ def test_states_of_a_run_folder(tmp_path):
     assert other.state is State.MISMATCH and "imitation_count: 5 recorded, 3 asked" in other.reason
     (tmp_path / "bare").mkdir()
     assert run_state(tmp_path / "bare", SPEC).state is State.UNFINISHED
+
+
+def unlike_fingerprint(**changes) -> dict:
+    """SPEC's fingerprint as another checkout would have made it."""
+    made = spec_fingerprint(SPEC).to_dict()
+    made["fields"] = {**made["fields"], **changes}
+    return made
+
+
+def test_a_finished_run_of_another_learner_is_unlike_and_says_why(tmp_path):
+    """Resume compares the whole learner, not only the swept settings: a run whose recorded
+    defaults, code or numpy differ from this checkout's is not reused."""
+    numpy_run = make_run(tmp_path / "numpy", fingerprint=unlike_fingerprint(numpy="1.26.4"))
+    state = run_state(numpy_run, SPEC)
+    assert state.state is State.UNLIKE and "numpy" in state.reason
+    # a default that changed since (the run holds zeta 20 where today's default is 50)
+    params = {node: dict(values) for node, values in
+              spec_fingerprint(SPEC).parameters.items()}
+    params["low_level_explorer"]["zeta"] = 20
+    from sgim_nodes.provenance.fingerprint import fingerprint
+
+    older = fingerprint(params).to_dict()
+    state = run_state(make_run(tmp_path / "zeta", fingerprint=older), SPEC)
+    assert state.state is State.UNLIKE and "parameters (zeta)" in state.reason
+    bare = make_run(tmp_path / "old", fingerprint={})
+    assert "before learner fingerprints" in run_state(bare, SPEC).reason
+    resumed = make_run(tmp_path / "resumed")
+    meta = yaml.safe_load((resumed / "metadata.yaml").read_text())
+    meta["resumed"] = [{"segment": "bag.resume1", "fingerprint_changed": ["code"]}]
+    (resumed / "metadata.yaml").write_text(yaml.safe_dump(meta))
+    assert "resumed by another learner (bag.resume1)" in run_state(resumed, SPEC).reason
 
 
 def _archive(folder: Path, name: str, extra: tuple[str, bytes] | None = None) -> bytes:

@@ -179,15 +179,17 @@ def test_load_names_the_file(tmp_path):
     assert load(good, tmp_path / "elsewhere").runs_dir == tmp_path / "elsewhere"
 
 
-def test_study_sweep_is_run_studys_study():
-    """The default sweep file makes run_study.sh's runs, under its folder names."""
+def test_the_pinned_study_is_run_studys_study():
+    """The pinned study (experiments/study.yaml) makes run_study.sh's runs, under its folder
+    names, so either resumes what the other began."""
+    from sgim_nodes.experiments.pinned import find
+
     args = batch.parse_args([])
-    sweep = load(SWEEPS / "study.yaml")
-    assert sweep.runs_dir == args.runs_dir
+    runs = find("study").graph_runs
     expected = {f"{learner}-seed{seed}" for seed in range(args.first_seed, args.seeds)
                 for learner in args.learners}
-    assert {r.name for r in sweep.runs} == expected
-    for run in sweep.runs:
+    assert {r.name for r in runs} == expected
+    for run in runs:
         assert run.movements == args.movements and run.eval_every == args.eval_every
         assert run.params == () and run.period in (None, 150)
 

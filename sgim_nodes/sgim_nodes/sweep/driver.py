@@ -93,6 +93,10 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                    help="seconds between progress lines (default: %(default)s)")
     p.add_argument("--list", action="store_true",
                    help="print every run, its state and its run_experiment command, and exit")
+    p.add_argument("--keep-unlike", action="store_true",
+                   help="keep finished runs whose learner fingerprint differs from this "
+                        "checkout's (the learner changed since they were made) instead of "
+                        "making them again; analyze will then refuse to pool them")
     args = p.parse_args(argv)
     if args.parallel < 1 or args.cpus_per_run <= 0 or args.max_retries < 0:
         p.error("--parallel must be >= 1, --cpus-per-run > 0 and --max-retries >= 0")
@@ -333,6 +337,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SweepFileError as error:
         print(f"run_sweep: {error}", file=sys.stderr)
         return 2
+    return drive(sweep, args)
+
+
+def drive(sweep: Sweep, args: argparse.Namespace) -> int:
+    """Make the sweep's runs that are not finished (or list them, with --list)."""
     states = {spec.name: results.run_state(sweep.runs_dir / spec.name, spec)
               for spec in sweep.runs}
     if args.list:
@@ -353,8 +362,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     except results.ResultsBusy as error:
         print(f"run_sweep: {error}", file=sys.stderr)
         return 2
+    unlike = {n: s.reason for n, s in states.items() if s.state is State.UNLIKE}
     with lock:
         results.clean_incoming(sweep.runs_dir)
+        for name, reason in unlike.items():
+            if args.keep_unlike:
+                say(f"{name}: {reason}; kept (--keep-unlike)")
+                states[name] = results.RunState(State.FINISHED, reason)
+            else:
+                aside = results.set_aside(sweep.runs_dir, name)
+                say(f"{name}: {reason}; made again (the old run moved to {aside})")
+                states[name] = results.RunState(State.ABSENT)
         todo = [s for s in sweep.runs if states[s.name].state is not State.FINISHED]
         say(f"{sweep.name}: {len(sweep.runs)} runs, {len(sweep.runs) - len(todo)} already "
             f"finished, {len(todo)} to do -> {sweep.runs_dir}")

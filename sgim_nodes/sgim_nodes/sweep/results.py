@@ -9,10 +9,13 @@ into place, so a run folder is either absent or whole; what a dead driver leaves
 
 A run is *finished* when its metadata.yaml says ``outcome: finished``, every recording of it
 is complete (metadata.yaml beside the storage files, MCAP files closed with their footer)
-and holds at least the movement budget on ``movements``, and its parameters are the ones the
-sweep asks for. A finished run is never made again; an unfinished one is made again from
-scratch (a resumed run restarts its random streams, so it is not the run an uninterrupted one
-would be).
+and holds at least the movement budget on ``movements``, its parameters are the ones the
+sweep asks for, and its learner fingerprint (provenance/fingerprint.py) is the one today's
+checkout gives those settings. A finished run is never made again; an unfinished one is made
+again from scratch (a resumed run restarts its random streams, so it is not the run an
+uninterrupted one would be); a finished run of another learner (*unlike*: the code, the data,
+a library or a default parameter changed since) is named with what differs and made again,
+the old folder kept aside in ``.unlike/``, unless the sweep is told to keep it.
 """
 
 from __future__ import annotations
@@ -32,9 +35,10 @@ import yaml
 
 from sgim_nodes.bag.mcap_recovery import MAGIC
 from sgim_nodes.bag.run_folder import segments
-from sgim_nodes.sweep.sweep_file import RunSpec
+from sgim_nodes.sweep.sweep_file import RunSpec, spec_fingerprint
 
 INCOMING = ".incoming"
+UNLIKE_DIR = ".unlike"  # finished runs of another learner, moved aside before being made again
 STATUS_FILE = "sweep_status.yaml"
 RUN_RECORD = "sweep_run.yaml"  # in each run folder: the sweep's settings, node, attempts, times
 LOCK_FILE = ".sweep.lock"
@@ -46,6 +50,7 @@ class State(enum.Enum):
     FINISHED = "finished"
     UNFINISHED = "unfinished"  # made again from scratch
     MISMATCH = "mismatch"  # a finished run of other settings: the sweep refuses to touch it
+    UNLIKE = "unlike"  # a finished run of the settings, made by another learner: made again
 
 
 @dataclass(frozen=True)
@@ -115,6 +120,22 @@ def settings_problem(meta: dict, spec: RunSpec) -> str | None:
     return "; ".join(differ) or None
 
 
+def learner_problem(meta: dict, spec: RunSpec) -> str | None:
+    """How the run's learner differs from the one today's checkout makes for the spec (the
+    fingerprint's fields, and resumed parts made by another learner), or None."""
+    from sgim_nodes.provenance.fingerprint import Fingerprint
+
+    recorded = Fingerprint.from_dict(meta.get("fingerprint"))
+    if recorded is None:
+        return "made before learner fingerprints were recorded"
+    differ = recorded.differences(spec_fingerprint(spec))
+    changed = [entry["segment"] for entry in meta.get("resumed") or []
+               if isinstance(entry, dict) and entry.get("fingerprint_changed")]
+    if changed:
+        differ.append(f"resumed by another learner ({', '.join(changed)})")
+    return ", ".join(differ) or None
+
+
 def run_state(run_dir: Path, spec: RunSpec) -> RunState:
     if not run_dir.exists():
         return RunState(State.ABSENT)
@@ -126,10 +147,25 @@ def run_state(run_dir: Path, spec: RunSpec) -> RunState:
     differ = settings_problem(meta, spec)
     if differ:
         return RunState(State.MISMATCH, differ)
+    unlike = learner_problem(meta, spec)
+    if unlike:
+        return RunState(State.UNLIKE, f"its learner differs from this checkout's: {unlike}")
     problem = recording_problem(run_dir, spec.movements)
     if problem:
         return RunState(State.UNFINISHED, problem)
     return RunState(State.FINISHED)
+
+
+def set_aside(runs_dir: Path, name: str) -> Path:
+    """Move a finished run of another learner out of the way, keeping it: .unlike/<name>.N."""
+    aside = runs_dir / UNLIKE_DIR
+    aside.mkdir(parents=True, exist_ok=True)
+    number = 1
+    while (aside / f"{name}.{number}").exists():
+        number += 1
+    target = aside / f"{name}.{number}"
+    (runs_dir / name).rename(target)
+    return target
 
 
 def lock_results(runs_dir: Path) -> IO[str]:

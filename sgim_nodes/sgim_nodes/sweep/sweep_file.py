@@ -45,12 +45,15 @@ from sgim_nodes.graph.description import (
     STORAGES,
     RunOptions,
     check,
+    fingerprint,
     graph,
     learner_defaults,
+    parameters,
     social_mode_problems,
     unused,
 )
 from sgim_nodes.graph.experiment_options import REPO
+from sgim_nodes.provenance.fingerprint import Fingerprint
 from sgim_ros.params import ParameterError
 
 # Settings of one run: the file's keys (param: -> run_experiment --param NAME=VALUE).
@@ -131,6 +134,22 @@ class Sweep:
     runs_dir: Path
     run_timeout: float | None
     runs: tuple[RunSpec, ...]
+
+
+def spec_fingerprint(spec: RunSpec) -> Fingerprint:
+    """The learner fingerprint run_experiment gives this spec's run (its options as
+    run_experiment reads spec.argv(); the seed and the folder do not count)."""
+    return _fingerprint_of(spec.learner, spec.movements, spec.eval_every,
+                           spec.period or DEFAULTS["period"], spec.teacher or DEFAULTS["teacher"],
+                           spec.storage, spec.params)
+
+
+@cache
+def _fingerprint_of(learner: str, movements: int, eval_every: int, period: int, teacher: str,
+                    storage: str, params: tuple[tuple[str, str], ...]) -> Fingerprint:
+    options = RunOptions(learner, 0, movements, eval_every, period, teacher, "", storage,
+                         checked_params(params))
+    return fingerprint(parameters(options), graph(learner, teacher))
 
 
 def checked_params(params: Iterable[tuple[str, str]]) -> dict[str, Any]:
