@@ -30,9 +30,7 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(REPO / "sgim_nodes"), str(REPO / "benchmarks")]
-
-from bench_learners import goals_for  # noqa: E402
+sys.path[:0] = [str(REPO / "sgim_nodes"), str(REPO / "sim_bridge")]
 
 from sgim_nodes.core.config import INVERSE_MODELS, LearnerConfig  # noqa: E402
 from sgim_nodes.core.inverse_model import InverseModel  # noqa: E402
@@ -40,6 +38,7 @@ from sgim_nodes.core.learners import inverse_model_for, make_learner  # noqa: E4
 from sgim_nodes.core.memory import Memory  # noqa: E402
 from sgim_nodes.core.planar_arm import ARMS  # noqa: E402
 from sgim_nodes.core.runner import build_world, run  # noqa: E402
+from sgim_nodes.experiments.runner_jobs import goals_for  # noqa: E402
 
 INTERPOLATION_SIGMA = 0.05
 """Bandwidth of the paper-style interpolation (the value the project used before issue 10)."""

@@ -23,12 +23,10 @@ def test_first_seed_runs_the_seeds_after_it(tmp_path):
 def test_fishing_has_validation_goals_apart_from_its_benchmark():
     """Fishing choices are judged on other points of the benchmark's cells, never on its goals;
     no floor is shipped for them (NaN, not the benchmark's)."""
-    import sys
 
     import numpy as np
 
-    sys.path.insert(0, str(REPO / "benchmarks"))
-    from bench_learners import floor, goals_for
+    from sgim_nodes.experiments.runner_jobs import floor, goals_for
 
     _, benchmark = goals_for("fishing", "benchmark")
     _, validation = goals_for("fishing", "validation")
@@ -48,7 +46,6 @@ def test_bad_counts_are_refused_with_a_message():
 def test_mode1_shares_are_printed_only_for_learners_with_mode_1():
     """random-goals draws no mode-1 goal: no share line for it, no NaN, no numpy warning;
     a frame in which no run drew one is a dash, not a mean of nothing."""
-    import sys
 
     import numpy as np
 
@@ -61,8 +58,7 @@ def test_mode1_shares_are_printed_only_for_learners_with_mode_1():
     assert len(lines) == 1, proc.stdout  # SAGG-RIAC's only
     lower_level = proc.stdout.split("lower level and interest")[1]
     assert "nan" not in lower_level
-    sys.path.insert(0, str(REPO / "benchmarks"))
-    from bench_learners import frame_means
+    from sgim_nodes.experiments.reports.learners import frame_means
 
     nan = float("nan")
     assert frame_means(np.array([[nan, nan], [nan, nan]])) is None

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from sgim_nodes.core import portable
 from sgim_nodes.core.goal_reaching import GoalAttempt
 from sgim_nodes.core.imitation import Imitation
 from sgim_nodes.core.learners import GoalBabblingLearner
@@ -79,8 +80,8 @@ class Probe:
             track = tracked.pop(id(process), None)
             if track is not None and track[1] is not None:
                 goal = np.asarray(process.goal, float)
-                true_start = float(np.linalg.norm(forward(track[0]) - goal))
-                true_best = float(np.linalg.norm(forward(track[1]) - goal))
+                true_start = portable.norm(forward(track[0]) - goal)
+                true_best = portable.norm(forward(track[1]) - goal)
             self.attempts.append(AttemptRecord(
                 learner.n_movements, learner.last_goal_mode if is_attempt else 4,
                 np.asarray(process.goal, float).copy(), is_attempt and process.explore,

@@ -1,0 +1,1 @@
+"""Pinned experiments: the files under experiments/ that make every published figure."""

@@ -1,0 +1,227 @@
+"""`ros_ws/reproduce.sh NAME`: make a pinned experiment's runs, analyse them, write its pages.
+
+One command per page: the experiment file (experiments/NAME.yaml) fixes the runs, the runs are
+made or resumed (here, several side by side, or on a Ray cluster with --address), and the
+report writes the page's generated blocks and figures, with a provenance block saying what
+made them. Hand-written prose around the blocks stays as it is.
+
+`--check` (run by the test suite) says which pages are stale: made by another learner than
+today's checkout gives the experiment, without the banner that says so; `--mark-stale` writes
+that banner.
+
+Exit codes: 0 done, 1 a run or the report failed, or --check found a stale page without its
+banner, 2 refused (unknown experiment, a bad experiment file, data files other than pinned).
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from sgim_nodes.experiments import pages
+from sgim_nodes.experiments.makers import make_runs, say
+from sgim_nodes.experiments.pinned import (
+    EXPERIMENTS,
+    REPO,
+    Experiment,
+    ExperimentError,
+    all_experiments,
+    find,
+)
+from sgim_nodes.provenance.fingerprint import environment
+from sgim_nodes.provenance.record import Provenance
+
+FIGURES = REPO / "docs" / "figures"
+
+
+def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
+    known = ", ".join(p.stem for p in sorted(EXPERIMENTS.glob("*.yaml")))
+    p = argparse.ArgumentParser(
+        prog="ros_ws/reproduce.sh", description=__doc__.split("\n\n")[0],
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog=f"experiments: {known}\nexample: ros_ws/reproduce.sh study --parallel 2")
+    p.add_argument("names", nargs="*", metavar="NAME", help="experiments to reproduce")
+    p.add_argument("--all", action="store_true", help="every experiment of experiments/")
+    p.add_argument("--parallel", type=int, default=2,
+                   help="runs side by side on this machine (default: %(default)s)")
+    p.add_argument("--address", help="make the runs on this Ray cluster (HOST:PORT)")
+    p.add_argument("--runs-dir", type=Path,
+                   help="where the runs go (one experiment only; default "
+                        "runs/experiments/NAME)")
+    p.add_argument("--report-only", action="store_true",
+                   help="make no run: analyse the runs there and write the pages")
+    p.add_argument("--runs-only", action="store_true", help="make the runs, write no page")
+    p.add_argument("--keep-unlike", action="store_true",
+                   help="keep runs made by another learner instead of making them again")
+    p.add_argument("--list", action="store_true",
+                   help="each experiment: its pages, fingerprint, state and runs")
+    p.add_argument("--check", action="store_true",
+                   help="fail on a stale page without its banner, or on unpinned data")
+    p.add_argument("--mark-stale", action="store_true",
+                   help="write the banner into every stale page")
+    p.add_argument("--pin", action="store_true",
+                   help="write today's data file hashes into the named experiment files")
+    args = p.parse_args(argv)
+    if args.parallel < 1:
+        p.error("--parallel must be >= 1")
+    if args.runs_dir and len(args.names) != 1:
+        p.error("--runs-dir needs exactly one experiment")
+    if args.report_only and args.runs_only:
+        p.error("--report-only and --runs-only exclude each other")
+    if not (args.names or args.all or args.list or args.check or args.mark_stale):
+        p.error("name an experiment (or --all, --list, --check, --mark-stale)")
+    return args
+
+
+def selected(args: argparse.Namespace) -> list[Experiment]:
+    if args.all or not args.names:
+        return all_experiments()
+    return [find(name) for name in args.names]
+
+
+def check(experiments: list[Experiment], mark: bool) -> int:
+    """Every page of every experiment: fresh, or bannered (written with ``mark``)."""
+    problems = 0
+    for exp in experiments:
+        for problem in exp.data_problems():
+            print(f"{exp.path.name}: {problem} (ros_ws/reproduce.sh {exp.name} --pin pins "
+                  "today's files; the pages then need making again)")
+            problems += 1
+        expected = exp.fingerprint()
+        for page in exp.pages:
+            path = REPO / page
+            state = pages.freshness(path, exp.name, expected)
+            text = path.read_text(encoding="utf-8")
+            if state.fresh:
+                if pages.has_banner(text, exp.name):
+                    path.write_text(pages.remove_banner(text, exp.name), encoding="utf-8") \
+                        if mark else print(f"{page}: fresh, but it says it is stale "
+                                           f"({exp.name}); --mark-stale takes the banner off")
+                continue
+            if pages.has_banner(text, exp.name):
+                continue
+            if mark:
+                banner = pages.banner(exp.name, state.made, expected, state.why())
+                path.write_text(pages.with_banner(text, banner), encoding="utf-8")
+                print(f"{page}: marked stale ({exp.name}: {state.why()})")
+                continue
+            print(f"{page}: stale and not marked: {exp.name}'s learner fingerprint is "
+                  f"{expected} today, the page was {state.why()}. Make it again "
+                  f"(ros_ws/reproduce.sh {exp.name}) or mark it (ros_ws/reproduce.sh "
+                  "--mark-stale)")
+            problems += 1
+    return 1 if problems else 0
+
+
+def listing(experiments: list[Experiment]) -> int:
+    for exp in experiments:
+        expected = exp.fingerprint()
+        states = [f"{page} " + ("fresh" if pages.freshness(REPO / page, exp.name,
+                                                           expected).fresh else "stale")
+                  for page in exp.pages]
+        runs = exp.run_fingerprints()
+        print(f"{exp.name}\t{exp.maker}\t{len(runs)} runs\tfingerprint {expected}\t"
+              + "; ".join(states))
+    return 0
+
+
+def pin(exp: Experiment) -> None:
+    """Rewrite the experiment file's data hashes (the lines under 'data:') with today's."""
+    from sgim_nodes.experiments.pinned import pin_of
+    from sgim_nodes.provenance.fingerprint import data_files
+
+    lines = exp.path.read_text(encoding="utf-8").splitlines(keepends=True)
+    found = {name: pin_of(path) for name, path in data_files().items()}
+    out, inside = [], False
+    for line in lines:
+        if line.startswith("data:"):
+            inside = True
+            out.append("data:\n")
+            out += [f"  {name}: {digest}\n" for name, digest in sorted(found.items())]
+            continue
+        if inside and (line.startswith(" ") or not line.strip()):
+            continue
+        inside = False
+        out.append(line)
+    exp.path.write_text("".join(out), encoding="utf-8")
+    say(f"{exp.path.name}: data pinned to today's files")
+
+
+def reproduce(exp: Experiment, args: argparse.Namespace, command: str) -> int:
+    from sgim_nodes.experiments.reports import maker
+
+    problems = exp.data_problems()
+    if problems:
+        for problem in problems:
+            say(f"{exp.path.name}: {problem}")
+        say("the world's data files are not the ones the experiment pins: `--pin` pins "
+            "today's files (a deliberate change of the experiment)")
+        return 2
+    runs_dir = args.runs_dir or exp.runs_dir
+    began = time.monotonic()
+    if not args.report_only:
+        say(f"{exp.name}: making its runs in {runs_dir} ({exp.maker})")
+        code = make_runs(exp, runs_dir, args.parallel, args.address, args.keep_unlike)
+        if code:
+            say(f"{exp.name}: some runs did not finish (exit {code}); run the same command to "
+                "resume")
+            return 1
+    if args.runs_only:
+        return 0
+    say(f"{exp.name}: analysing {runs_dir}")
+    report = maker(exp.report)(exp, runs_dir, FIGURES)
+    wall = time.monotonic() - began
+    notes = [*report.notes, f"runs in `{_shown(runs_dir)}`"]
+    made = Provenance.now(command, exp.name, exp.fingerprint(), environment(), wall, notes)
+    for page in exp.pages:
+        blocks = dict(report.blocks.get(page, {}))
+        blocks["provenance"] = made.markdown()
+        pages.write_page(REPO / page, blocks, exp.name)
+        say(f"{exp.name}: wrote {page}")
+    for figure in report.figures:
+        say(f"{exp.name}: drew {_shown(figure)}")
+    return 0
+
+
+def _shown(path: Path) -> str:
+    try:
+        return str(Path(path).resolve().relative_to(REPO))
+    except ValueError:
+        return str(path)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = parse_args(argv)
+    command = "ros_ws/reproduce.sh " + " ".join(shlex.quote(a) for a in (
+        argv if argv is not None else sys.argv[1:]))
+    try:
+        experiments = selected(args)
+        if args.list:
+            return listing(experiments)
+        if args.check or args.mark_stale:
+            return check(experiments, args.mark_stale)
+        if args.pin:
+            for exp in experiments:
+                pin(exp)
+            return 0
+        code = 0
+        for exp in experiments:
+            code = max(code, reproduce(exp, args, command))
+        return code
+    except ExperimentError as error:
+        print(f"reproduce: {error}", file=sys.stderr)
+        return 2
+    except pages.PageError as error:
+        print(f"reproduce: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        say("interrupted: the runs made are kept; the same command resumes")
+        return 130
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

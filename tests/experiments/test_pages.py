@@ -1,0 +1,59 @@
+"""Generated blocks of a page, and the stale banner."""
+
+from __future__ import annotations
+
+import pytest
+
+from sgim_nodes.experiments import pages
+from sgim_nodes.provenance.fingerprint import environment
+from sgim_nodes.provenance.record import Provenance
+
+PAGE = """# A page
+
+Some prose.
+
+<!-- begin generated provenance -->
+old
+<!-- end generated provenance -->
+
+More prose stays.
+
+<!-- begin generated table -->
+| a |
+<!-- end generated table -->
+"""
+
+
+def made(fingerprint: str = "a" * 16) -> str:
+    return Provenance.now("ros_ws/reproduce.sh x", "x", fingerprint, environment(), 1.0
+                          ).markdown()
+
+
+def test_fill_replaces_only_the_named_blocks_and_keeps_the_prose():
+    out = pages.fill(PAGE, {"table": "| b |\n| c |", "provenance": made()}, "page.md")
+    assert "Some prose." in out and "More prose stays." in out
+    assert pages.blocks_of(out)["table"] == "| b |\n| c |\n"
+    assert pages.provenance_of(out, "x").fingerprint == "a" * 16
+    assert pages.provenance_of(out, "y") is None
+    assert pages.fill(out, {"table": "| b |\n| c |"}, "p") == out  # idempotent
+
+
+def test_a_block_the_page_lacks_is_named():
+    with pytest.raises(pages.PageError, match=r"page\.md has no block for curves, figures"):
+        pages.fill(PAGE, {"curves": "x", "figures": "y", "table": "z"}, "page.md")
+
+
+def test_banner_goes_under_the_title_and_comes_off_when_fresh(tmp_path):
+    text = pages.fill(PAGE, {"provenance": made()}, "p")
+    marked = pages.with_banner(text, pages.banner("x", pages.provenance_of(text, "x"),
+                                                  "b" * 16, "made with another"))
+    assert marked.startswith("# A page\n\n<!-- stale x: begin -->\n> **Stale.**")
+    assert "`ros_ws/reproduce.sh x`" in marked and pages.has_banner(marked, "x")
+    assert not pages.has_banner(marked, "other")
+    path = tmp_path / "page.md"
+    path.write_text(marked)
+    pages.write_page(path, {"provenance": made("b" * 16)}, "x")
+    fresh = path.read_text()
+    assert not pages.has_banner(fresh, "x")
+    assert pages.freshness(path, "x", "b" * 16).fresh
+    assert not pages.freshness(path, "x", "c" * 16).fresh

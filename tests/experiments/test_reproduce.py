@@ -1,0 +1,159 @@
+"""ros_ws/reproduce.sh end to end on a tiny experiment: runs made once and resumed, the page's
+blocks written with their provenance, stale pages found and marked, data pins enforced."""
+
+from __future__ import annotations
+
+import textwrap
+from pathlib import Path
+
+import pytest
+import yaml
+
+from sgim_nodes.experiments import cli, pages, pinned, world_jobs
+from sgim_nodes.experiments.pinned import pin_of
+from sgim_nodes.provenance.fingerprint import data_files
+
+PAGE = """# The pond
+
+<!-- begin generated provenance -->
+<!-- end generated provenance -->
+
+Prose about the pond.
+
+<!-- begin generated pond-share -->
+<!-- end generated pond-share -->
+"""
+
+
+@pytest.fixture
+def repo(tmp_path, monkeypatch) -> Path:
+    """A repository of one experiment (20 random casts in two chunks) and its page."""
+    (tmp_path / "experiments").mkdir()
+    (tmp_path / "docs").mkdir()
+    (tmp_path / "docs" / "pond.md").write_text(PAGE)
+    pins = {name: pin_of(path) for name, path in data_files().items()}
+    (tmp_path / "experiments" / "pond.yaml").write_text(textwrap.dedent(f"""\
+        # twenty casts
+        name: pond
+        maker: world
+        report: isolated_region
+        pages: [docs/pond.md]
+        data: {yaml.safe_dump(pins, default_flow_style=True, width=10**4).strip()}
+        runs:
+          casts: 20
+          chunk: 10
+          seed: 3
+        """))
+    for module in (pinned, cli):
+        monkeypatch.setattr(module, "REPO", tmp_path)
+        monkeypatch.setattr(module, "EXPERIMENTS", tmp_path / "experiments")
+    monkeypatch.setattr(cli, "FIGURES", tmp_path / "docs" / "figures")
+    monkeypatch.setenv("SGIM_EXPERIMENT_RUNS", str(tmp_path / "runs"))
+    return tmp_path
+
+
+@pytest.mark.slow
+def test_reproduce_makes_the_runs_once_and_writes_the_page(repo, capsys):
+    assert cli.main(["pond", "--parallel", "2"]) == 0
+    err = capsys.readouterr().err
+    assert "2 runs, 0 already made, 2 to do" in err
+    runs = sorted((repo / "runs" / "pond").glob("*.npz"))
+    assert [p.name for p in runs] == ["casts-seed3-chunk0.npz", "casts-seed3-chunk1.npz"]
+    text = (repo / "docs" / "pond.md").read_text()
+    assert "Prose about the pond." in text and "| random casts | 20 (" in text
+    made = pages.provenance_of(text, "pond")
+    experiment = pinned.find("pond")
+    assert made.fingerprint == experiment.fingerprint()
+    assert made.command == "ros_ws/reproduce.sh pond --parallel 2"
+    # made again: nothing to cast, the same page
+    before = {p: p.stat().st_mtime_ns for p in runs}
+    assert cli.main(["pond"]) == 0
+    assert "2 runs, 2 already made, 0 to do" in capsys.readouterr().err
+    assert {p: p.stat().st_mtime_ns for p in runs} == before
+    assert cli.main(["--check"]) == 0
+
+
+def test_check_finds_a_stale_page_and_mark_stale_bannering_it(repo, capsys):
+    page = repo / "docs" / "pond.md"
+    assert cli.main(["--check"]) == 1  # never made: no provenance
+    assert "docs/pond.md: stale and not marked: pond's" in capsys.readouterr().out
+    assert cli.main(["--mark-stale"]) == 0
+    assert pages.has_banner(page.read_text(), "pond")
+    assert cli.main(["--check"]) == 0
+
+
+def test_a_change_of_the_runs_makes_the_page_stale(repo, capsys):
+    experiment = pinned.find("pond")
+    page = repo / "docs" / "pond.md"
+    from sgim_nodes.provenance.fingerprint import environment
+    from sgim_nodes.provenance.record import Provenance
+
+    made = Provenance.now("x", "pond", experiment.fingerprint(), environment(), 1.0)
+    pages.write_page(page, {"provenance": made.markdown()}, "pond")
+    assert cli.main(["--check"]) == 0
+    path = repo / "experiments" / "pond.yaml"
+    path.write_text(path.read_text().replace("seed: 3", "seed: 4"))
+    assert cli.main(["--check"]) == 1
+    assert "stale and not marked" in capsys.readouterr().out
+
+
+def test_data_other_than_pinned_is_refused_and_pin_takes_todays(repo, capsys):
+    path = repo / "experiments" / "pond.yaml"
+    text = path.read_text()
+    first = next(iter(data_files()))
+    path.write_text(text.replace(pin_of(data_files()[first]), "sha256:" + "0" * 16))
+    assert cli.main(["pond"]) == 2
+    assert f"{first} is " in capsys.readouterr().err
+    assert cli.main(["--check"]) == 1
+    assert cli.main(["pond", "--pin"]) == 0
+    assert pinned.find("pond").data_problems() == []
+    assert "# twenty casts" in path.read_text()
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    ("name: pond", "name 'other' must be the file's name"),
+    ("maker: world", "maker must be one of graph, runner, world"),
+    ("pages: [docs/pond.md]", "pages must list existing pages"),
+    ("  casts: 20", "runs takes casts, chunk"),
+])
+def test_a_bad_experiment_file_is_refused_with_its_reason(repo, capsys, change, message):
+    path = repo / "experiments" / "pond.yaml"
+    bad = {"name: pond": "name: other", "maker: world": "maker: robot",
+           "pages: [docs/pond.md]": "pages: [docs/absent.md]",
+           "  casts: 20": "  casts: twenty"}[change]
+    path.write_text(path.read_text().replace(change, bad))
+    assert cli.main(["pond", "--report-only"]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_a_key_given_twice_is_refused(repo, capsys):
+    path = repo / "experiments" / "pond.yaml"
+    path.write_text(path.read_text() + "maker: graph\n")
+    assert cli.main(["--list"]) == 2
+    assert "the key 'maker' is given twice" in capsys.readouterr().err
+
+
+def test_a_chunk_of_another_learner_is_made_again(repo, capsys, monkeypatch):
+    experiment = pinned.find("pond")
+    runs = repo / "runs" / "pond"
+    runs.mkdir(parents=True)
+    calls = []
+
+    def fake_run(job):
+        calls.append(job.name)
+        return {"name": job.name, "points": world_jobs.touch_downs.__doc__ and
+                __import__("numpy").zeros((job.casts, 2)),
+                "fingerprint": job.fingerprint().value, "seconds": 0.0}
+
+    jobs = experiment.world_jobs
+    world_jobs.write_result(world_jobs.result_path(runs, jobs[0]), fake_run(jobs[0]))
+    stale = fake_run(jobs[1]) | {"fingerprint": "0" * 16}
+    world_jobs.write_result(world_jobs.result_path(runs, jobs[1]), stale)
+    calls.clear()
+    from sgim_nodes.experiments import makers
+
+    monkeypatch.setattr(world_jobs, "run_job", fake_run)
+    assert makers.make_file_jobs(jobs, world_jobs, runs, 1, None, False) == 0
+    assert calls == [jobs[1].name]
+    assert "casts-seed3-chunk1: its learner differs" in capsys.readouterr().err
+    assert len(list((runs / makers.UNLIKE_DIR).iterdir())) == 1
