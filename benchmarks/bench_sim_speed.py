@@ -6,7 +6,9 @@ process is printed beside it because, on a machine shared with other jobs, the w
 counts the time this process waited for a core (compare the two to see how loaded the machine
 was). ``--repeat N`` runs the same casts N times and prints each and the best.
 ``--accuracy N`` also casts N random actions without noise in this world and in one whose
-constraint solver runs 300 sweeps (converged), and prints how far the touch-downs differ.
+constraint solver has converged (MLCP with 300 Gauss-Seidel sweeps), and prints how far the
+touch-downs differ. ``--solver gauss-seidel`` measures the world's previous solver (50 sweeps)
+beside its own, Dantzig's pivoting (``shipped`` or ``dantzig``).
 ``--shared-world N`` times a bare ``stepSimulation`` of 1, 2, 4, ... N copies of the rod in
 ONE world, per step and per rod: could independent casts (the evaluation's goals) be batched?
 
@@ -23,7 +25,11 @@ import time
 import numpy as np
 import pybullet as pb
 
-from sim_bridge.fishing_world import FishingWorld, _quiet_c_stdout
+from sim_bridge.fishing_world import SOLVER_ITERATIONS, FishingWorld, _quiet_c_stdout
+
+SOLVERS = ("shipped", "dantzig", "gauss-seidel")
+"""``--solver``: the world as built (Dantzig's pivoting since issue 32), or either solver by name
+(``set_solver``)."""
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -35,9 +41,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--profile", action="store_true", help="print the top cProfile entries")
     parser.add_argument("--accuracy", type=int, default=0,
                         help="casts compared with a converged solver (0: skip)")
-    parser.add_argument("--solver", choices=("shipped", "dantzig"), default="shipped",
-                        help="constraint solver: the world's own, or MLCP solved by Dantzig's "
-                        "pivoting (measured, not applied: README_world.md, Speed)")
+    parser.add_argument("--solver", choices=SOLVERS, default="shipped",
+                        help="constraint solver: the world's own (Dantzig's pivoting), "
+                        "'dantzig' (the same, named), or 'gauss-seidel' (the previous one: "
+                        "MLCP with 50 projected Gauss-Seidel sweeps; README_world.md, Speed)")
     parser.add_argument("--shared-world", type=int, default=0, metavar="N",
                         help="only time bare steps of 1, 2, 4, ... N rods in one world")
     args = parser.parse_args(argv)
@@ -100,11 +107,13 @@ def shared_world_steps(most: int, steps: int = 2000) -> list[str]:
     return lines
 
 
-def set_solver(world: FishingWorld, solver: str, sweeps: int = 50) -> None:
+def set_solver(world: FishingWorld, solver: str, sweeps: int = SOLVER_ITERATIONS) -> None:
     """Switch a built world's constraint solver: ``dantzig`` (MLCP solved by Dantzig's
-    pivoting) or ``pgs`` (MLCP with ``sweeps`` projected Gauss-Seidel sweeps); the rest state
-    is saved again, as each cast restores it."""
-    kind = {"dantzig": pb.CONSTRAINT_SOLVER_LCP_DANTZIG, "pgs": pb.CONSTRAINT_SOLVER_LCP_PGS}
+    pivoting, the world's own) or ``gauss-seidel`` (MLCP with ``sweeps`` projected Gauss-Seidel
+    sweeps: with the default 50, the world's solver before issue 32), so that the two can still
+    be compared; the rest state is saved again, as each cast restores it."""
+    kind = {"dantzig": pb.CONSTRAINT_SOLVER_LCP_DANTZIG,
+            "gauss-seidel": pb.CONSTRAINT_SOLVER_LCP_PGS}
     with _quiet_c_stdout():  # pybullet prints "switched solver" from C
         pb.setPhysicsEngineParameter(constraintSolverType=kind[solver],
                                      numSolverIterations=sweeps, physicsClientId=world._client)
@@ -121,7 +130,7 @@ def solver_accuracy(n: int, seed: int, solver: str = "shipped") -> str:
     for reference in (False, True):
         with FishingWorld(seed=seed, noise=0.0) as w:
             if reference:
-                set_solver(w, "pgs", sweeps=300)
+                set_solver(w, "gauss-seidel", sweeps=300)
             elif solver != "shipped":
                 set_solver(w, solver)
             pts.append(np.array([world_to_outcome(r.world_point) if r.world_point is not None

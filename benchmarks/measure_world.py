@@ -7,8 +7,9 @@ is in normalised outcome units.
 
     PYTHONPATH=sim_bridge .venv/bin/python benchmarks/measure_world.py --casts 5000
 
-``--solver dantzig`` measures the same figures with the constraint solver that issue 11's
-speed target would need (bench_sim_speed.py), before any data file is made with it.
+``--solver gauss-seidel`` measures the same figures with the world's previous constraint solver
+(MLCP with 50 projected Gauss-Seidel sweeps; the world's own is Dantzig's pivoting since issue
+32), so that the two worlds can still be compared (bench_sim_speed.py, ``set_solver``).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import argparse
 import time
 
 import numpy as np
+from bench_sim_speed import SOLVERS, set_solver
 
 from sim_bridge.data_files import (
     ISOLATED_REGION,
@@ -37,8 +39,6 @@ def build(**kwargs) -> FishingWorld:
     """A FishingWorld with the solver --solver names."""
     world = FishingWorld(**kwargs)
     if SOLVER != "shipped":
-        from bench_sim_speed import set_solver
-
         set_solver(world, SOLVER)
     return world
 
@@ -149,8 +149,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--reachable", default=None,
                         help="reachable map .npz (default: sim_bridge/data/reachable_map.npz)")
     parser.add_argument("--png", default="docs/figures/sim_random_casts.png")
-    parser.add_argument("--solver", choices=("shipped", "dantzig"), default="shipped",
-                        help="constraint solver of the worlds measured (bench_sim_speed.py)")
+    parser.add_argument("--solver", choices=SOLVERS, default="shipped",
+                        help="constraint solver of the worlds measured: the world's own "
+                        "(Dantzig's pivoting), 'dantzig' or 'gauss-seidel' (the previous one; "
+                        "bench_sim_speed.py)")
     args = parser.parse_args(argv)
     global SOLVER
     SOLVER = args.solver
