@@ -1,15 +1,18 @@
-"""The learner as a library: `pip install ./sgim_nodes` in a fresh venv without ROS gives the
-core, and examples/own_environment.py runs SGIM-D on its own world there.
+"""The learner as a library: `pip install ./sgim_nodes` in a fresh venv without ROS, by Debian
+12's stock pip (23.0.1), gives the core and the `sgim-learn` command on the venv's PATH, puts no
+ROS-only or generic command there, and examples/own_environment.py runs SGIM-D on its own world.
 
 The venv is made from the base interpreter with no system site-packages and an environment
-cleared of everything ros_ws/env.sh sets, so nothing of the ROS workspace can leak in; pip
-takes numpy, scipy and tqdm from the package index (at the versions requirements.txt pins, so
-they come from pip's cache once ./bootstrap.sh has run). The package is copied first so the
-build leaves nothing in the source tree.
+cleared of everything ros_ws/env.sh sets, so nothing of the ROS workspace can leak in; numpy,
+scipy and tqdm come from the package index (at the versions requirements.txt pins, so from
+pip's cache once ./bootstrap.sh has run). The package is copied first so the build leaves
+nothing in the source tree.
 """
 
 from __future__ import annotations
 
+import ast
+import json
 import os
 import re
 import shutil
@@ -43,22 +46,48 @@ def clean_env() -> dict[str, str]:
     return {k: v for k, v in os.environ.items() if not k.startswith(drop)}
 
 
+def pip_install(python: Path | str, *args: str, cwd: Path, into: Path | None = None) -> None:
+    """`python -m pip install ARGS` (into the venv of `into` if given), quiet, under
+    requirements.txt's pins.
+
+    --no-compile: byte-compiling numpy and scipy was a third of the set-up, and only .pyc
+    files differ; what the test imports is compiled as it is imported.
+    """
+    where = ["--python", str(into)] if into else []
+    subprocess.run([str(python), "-m", "pip", *where, "install", "--quiet",
+                    "--no-compile", "--disable-pip-version-check",
+                    "-c", str(REPO / "requirements.txt"), *args],
+                   check=True, env=clean_env(), cwd=cwd, timeout=400)
+
+
 @pytest.fixture(scope="module")
 def plain_venv(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A venv without ROS holding `pip install ./sgim_nodes` (from a copy of the package)."""
+    """A venv without ROS where pip 23.0.1 ran `pip install ./sgim_nodes` (on a copy)."""
     root = tmp_path_factory.mktemp("plain")
     source = root / "sgim_nodes"
     shutil.copytree(REPO / "sgim_nodes", source,
                     ignore=shutil.ignore_patterns("__pycache__", "*.egg-info", "build"))
-    # No pip inside: the running pip installs into it (`pip --python`), which saves the
-    # ensurepip step; what gets installed is what `pip install ./sgim_nodes` installs.
     venv.EnvBuilder(with_pip=False, system_site_packages=False).create(root / "venv")
     python = root / "venv" / "bin" / "python"
-    subprocess.run([sys.executable, "-m", "pip", "--python", str(python), "install",
-                    "--quiet", "--disable-pip-version-check",
-                    "-c", str(REPO / "requirements.txt"), str(source)],
-                   check=True, env=clean_env(), cwd=root, timeout=400)
+    # What a fresh venv on Debian 12 holds: pip 23.0.1 and setuptools, no `wheel`, with which
+    # such a pip fell back to `setup.py install` and put the commands in lib/sgim_nodes/
+    # (issue 30). The running pip puts them in (`pip --python`: no ensurepip, five seconds),
+    # with the core's dependencies, which pip 23 takes a second longer to find in the index.
+    # Then the venv's own pip 23.0.1 builds and installs the package, as a user's would.
+    pip_install(sys.executable, "pip==23.0.1", "setuptools", "numpy", "scipy", "tqdm",
+                into=python, cwd=root)
+    pip_install(python, str(source), cwd=root)
     return python
+
+
+def colcon_commands() -> set[str]:
+    """The command names setup.py gives colcon's build (ROS_SCRIPTS): none is for pip."""
+    tree = ast.parse((REPO / "sgim_nodes" / "setup.py").read_text(encoding="utf-8"))
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and [getattr(t, "id", None)
+                                             for t in node.targets] == ["ROS_SCRIPTS"]:
+            return {entry.split("=")[0].strip() for entry in ast.literal_eval(node.value)}
+    raise AssertionError("sgim_nodes/setup.py has no ROS_SCRIPTS list")
 
 
 def run_in(python: Path, *args: str) -> subprocess.CompletedProcess[str]:
@@ -72,6 +101,17 @@ def test_venv_has_no_ros(plain_venv: Path) -> None:
     assert "No module named 'rclpy'" in probe.stderr
 
 
+def test_installed_by_debian_12_pip(plain_venv: Path) -> None:
+    """The install ran on the pip that showed the bug, in the set-up that triggered it, and
+    the package asks for what the core imports (the fixture installed those beforehand)."""
+    probe = run_in(plain_venv, "-c", "import importlib.metadata as m, importlib.util as u; "
+                                     "print(m.version('pip'), u.find_spec('wheel') is None, "
+                                     "*m.requires('sgim_nodes'))")
+    pip, no_wheel, *requires = probe.stdout.split()
+    assert (pip, no_wheel) == ("23.0.1", "True"), probe.stderr
+    assert {"numpy", "scipy", "tqdm"} <= set(requires)
+
+
 def test_core_imports_without_ros(plain_venv: Path) -> None:
     result = run_in(plain_venv, "-c", IMPORT_CORE)
     assert result.returncode == 0, result.stderr
@@ -81,12 +121,38 @@ def test_core_imports_without_ros(plain_venv: Path) -> None:
     assert leaked.strip() == "[]"
 
 
-def test_runner_command_installed(plain_venv: Path) -> None:
-    """`learn`, the single-process runner, is on the venv's path and starts without ROS."""
-    result = subprocess.run([str(plain_venv.parent / "learn"), "--help"], capture_output=True,
-                            text=True, env=clean_env(), timeout=300)
+def test_only_namespaced_commands_on_path(plain_venv: Path) -> None:
+    """pip installs `sgim-` commands into bin/, and none of colcon's generic, ROS-only ones."""
+    bin_dir = plain_venv.parent
+    ros_only = colcon_commands()
+    assert {"learn", "analyze", "replay", "recorder"} <= ros_only
+    assert not ros_only & {path.name for path in bin_dir.iterdir()}
+    assert not (bin_dir.parent / "lib" / "sgim_nodes").exists()  # colcon's layout, unused
+    probe = run_in(plain_venv, "-c", "import importlib.metadata as m; print(*(e.name for e in "
+                                     "m.distribution('sgim_nodes').entry_points))")
+    commands = probe.stdout.split()
+    assert "sgim-learn" in commands, probe.stderr
+    for command in commands:
+        assert command.startswith("sgim-")
+        assert (bin_dir / command).is_file()
+
+
+def test_runner_command_learns(plain_venv: Path) -> None:
+    """`sgim-learn`, the single-process runner, runs from the venv's bin/ without ROS."""
+    output = plain_venv.parents[2] / "run.jsonl"
+    result = subprocess.run([str(plain_venv.parent / "sgim-learn"), "--env", "planar-arm",
+                             "--movements", "200", "--output", str(output)],
+                            capture_output=True, text=True, env=clean_env(), timeout=300)
     assert result.returncode == 0, result.stderr
-    assert "--learner {sgim-d," in result.stdout
+    assert "sgim-d: final mean distance" in result.stderr
+    records = [json.loads(line) for line in output.read_text().splitlines()]
+    header, end = records[0], records[-1]
+    assert (header["type"], header["env"], header["movements"]) == ("header", "planar-arm", 200)
+    assert sum(r["type"] == "movement" for r in records) == 200
+    errors = [(r["movements"], r["mean_distance"]) for r in records if r["type"] == "evaluation"]
+    assert [n for n, _ in errors] == [0, 200]
+    assert end["type"] == "end" and end["final_mean_distance"] == errors[-1][1]
+    assert errors[-1][1] < 0.5 * errors[0][1]  # it learned
 
 
 def test_example_learns_on_its_own_world(plain_venv: Path) -> None:
