@@ -66,12 +66,12 @@ class LearnerConfig:
     max_goals_per_region: int = 100
     """A region splits once it holds MORE than this many goals.  explauto: 100 (SGIM-lineage
     code: 50).  Chosen with ``zeta`` on the arms' validation goals (docs/learners.md, section
-    4c): with 50 and 20, SAGG-RIAC's interest read noise in many small leaves and it ended
+    5): with 50 and 20, SAGG-RIAC's interest read noise in many small leaves and it ended
     significantly behind random goals on the 20-joint arm; with explauto's pair it ties."""
     zeta: int = 50
     """Interest window (eq. 2), even.  explauto: 50 (SGIM-lineage code: 10); must not exceed
     max_goals_per_region (explauto checks the same).  Chosen with ``max_goals_per_region``
-    (docs/learners.md, section 4c): neither alone does what the pair does."""
+    (docs/learners.md, section 5): neither alone does what the pair does."""
     min_goals_per_child: int = 5
     """A candidate cut must leave at least this many goals on each side; chosen because a
     child with almost no goals has a meaningless interest and the split would be degenerate."""
@@ -87,7 +87,7 @@ class LearnerConfig:
     sqrt(difference), a split quality that also rewards balanced children, after Baranes &
     Oudeyer's R-IAC (2009) and SAGG-RIAC (2013) as recalled, not checked against their text
     here. Default ``gap``: ``balanced`` did not lower the 20-joint arm's error
-    (docs/learners.md, 4b)."""
+    (docs/notes/measurements.md)."""
     min_region_width_size: float = 0.025
     """A dimension narrower than this fraction of the outcome box is not cut; stops endless
     splitting when mode 3 piles goals onto one point.  Chosen: 0.05 on [-1, 1]."""

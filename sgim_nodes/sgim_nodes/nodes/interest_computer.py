@@ -9,7 +9,7 @@ regions alike in both), so no goal waits for this map.
 Interfaces:
   subscribes  competences (sgim_msgs/Competence)
   publishes   region_map  (sgim_msgs/RegionMap)
-Parameters: the common ones and the region-tree ones of LearnerConfig (see README).
+Parameters: the common ones and the region-tree ones of LearnerConfig (docs/reference.md).
 """
 
 from __future__ import annotations

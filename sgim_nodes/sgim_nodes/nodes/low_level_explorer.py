@@ -11,7 +11,7 @@ as it spent a movement (marked from_demonstration for a demonstrated outcome ado
 goal: a goal-only demonstration, which the arbiter sends as a job of that one goal). Why the
 explorer, not the arbiter, asks for the next goal: three processes crossed in series at every
 goal (a ROS action's result, a service call, a new action) cost about 7 ms per goal, with 1.5
-movements per goal (README, "How a run flows").
+movements per goal (docs/guide.md, "How a run flows").
 
 The job ends at its movement cap (the goal under way is cut there), after `max_goals` goals, or
 at a cancel (the arbiter preempting for a demonstration or a pause), honoured at the next

@@ -19,7 +19,7 @@ A write error (a full disk, a file-size limit, an I/O error) ends the node at on
 code 3 (WRITE_FAILED) after logging why and how much the bag holds; the quarantine file says
 it too (`write_error`), so the launcher fails the run with the reason.
 
-Measured (benchmarks/bench_recorder.py): see README, "Reliability".
+Measured (benchmarks/bench_recorder.py): see docs/reliability.md.
 
 Interfaces (relative names, see docs/node_graph.md):
   subscribes  every topic of bag.types.TOPICS (RECORDS), region_map (LATEST_STATE durability,

@@ -7,7 +7,7 @@
 Without --address, Ray starts inside this command on this machine (--parallel runs side by
 side) and stops with it. With --address it joins a running cluster, whose every machine has a
 clone of this repository at the same commit, bootstrapped, and was started from a shell that
-sourced ros_ws/env.sh (README). Runs are spread over the machines; each is made in a scratch
+sourced ros_ws/env.sh (docs/guide.md). Runs are spread over the machines; each is made in a scratch
 folder of its machine and copied back here (results.py, task.py). The sweep is resumable:
 finished runs are skipped, and a run lost with its worker is retried by Ray (--max-retries)
 and counted once. Progress is printed and kept in <runs-dir>/sweep_status.yaml.
@@ -63,7 +63,7 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         description="Expand a sweep file into runs and make each one through the node graph "
                     "as a Ray task, here or on a Ray cluster; resumable (finished runs are "
                     "skipped). The file's format: sgim_nodes/sgim_nodes/sweep/sweep_file.py "
-                    "and the README.")
+                    "and docs/guide.md.")
     p.add_argument("sweep_file", type=Path, help="the sweep's YAML file")
     p.add_argument("--runs-dir", type=Path,
                    help="results directory, on this machine (default: the file's runs_dir, "
