@@ -4,9 +4,9 @@ It folds every competence into its own region tree, as the interest computer doe
 whose map it publishes: a goal waits for one small record from the explorer, not for a whole
 map rebuilt, sent and checked by a second process (the map grows with the run; docs/guide.md,
 "How a run flows"). The explorer asks for each goal through `choose_goal` (within its
-reach_goal job), saying how many attempted goals the tree must already hold; the answer waits for them, so the
-choice never depends on message timing, and the random stream "goals" makes it the very goal
-the single-process learner draws. Region ids are named in the map's order
+reach_goal job), saying how many attempted goals the tree must already hold; the answer waits
+for them, so the choice never depends on message timing, and the random stream "goals" makes it
+the very goal the single-process learner draws. Region ids are named in the map's order
 (core/live_regions.py), so a Goal's region_id is that of the interest computer's map.
 
 Interfaces:
