@@ -18,7 +18,7 @@ from rosbags.typesys.store import Typestore
 PACKAGE = "sgim_msgs"
 SOURCE_MSG_DIR = Path(__file__).resolve().parents[3] / PACKAGE / "msg"
 
-# Every topic of docs/node_graph.md, as rosbags type names. STATE_TOPICS keep only their
+# Every topic of docs/reference.md, as rosbags type names. STATE_TOPICS keep only their
 # latest value (LATEST_STATE QoS); the others are records (RECORDS QoS).
 TOPICS: dict[str, str] = {
     "movements": f"{PACKAGE}/msg/Movement",

@@ -21,7 +21,7 @@ it too (`write_error`), so the launcher fails the run with the reason.
 
 Measured (benchmarks/bench_recorder.py): see docs/reliability.md.
 
-Interfaces (relative names, see docs/node_graph.md):
+Interfaces (relative names, see docs/reference.md):
   subscribes  every topic of bag.types.TOPICS (RECORDS), region_map (LATEST_STATE durability,
               keep-all so no map is skipped), and the viewers' topics (bag.types.VIEW_TOPICS:
               pace_state, markers/*), recorded as they come, without validation
@@ -314,7 +314,7 @@ def _usage() -> str:
     lines = [
         "usage: recorder [--ros-args -p NAME:=VALUE ...]",
         "",
-        "Record every topic of a run (docs/node_graph.md) into a rosbag2 bag of one MCAP file.",
+        "Record every topic of a run (docs/reference.md) into a rosbag2 bag of one MCAP file.",
         "Example: ros_ws/ros2run.sh sgim_nodes recorder --ros-args -p output:=runs/run1",
         f"Exit codes: 0 done, 2 bad parameters, {WRITE_FAILED} the bag could not be written.",
         "",
