@@ -106,7 +106,7 @@ def test_the_teachers_empty_word_is_valid_and_an_unknown_source_is_not():
 
 
 def test_the_packaged_teaching_set_is_known():
-    assert teaching_set_size() == 27  # README_world.md: 27 demonstrations
+    assert teaching_set_size() == 29  # README_world.md: 29 demonstrations
     assert teaching_set_size("/no/such/file.npz") == 0
 
 
@@ -193,4 +193,4 @@ def test_the_validator_counts_by_topic_and_kind_and_summarises():
 
 def test_limits_come_from_a_runs_parameters():
     limits = Limits.for_run({"movements": 450, "action_size": 24, "outcome_size": 2})
-    assert limits.budget == 450 and limits.teaching_set_size == 27
+    assert limits.budget == 450 and limits.teaching_set_size == 29
