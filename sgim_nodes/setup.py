@@ -1,8 +1,8 @@
 """ament_python package of the learner's nodes and their ROS-free core.
 
 colcon builds it into ros_ws as a ROS package; ``pip install ./sgim_nodes`` installs it into any
-Python >= 3.11 environment without ROS, for the core (``sgim_nodes.core``, docs/guide.md,
-"Using the learner without ROS"). ``install_requires`` lists what the core and its runner import; the
+Python >= 3.11 environment without ROS, for the core (``sgim_nodes.core``, docs/guide.md, "Using
+the learner without ROS"). ``install_requires`` lists what the core and its runner import; the
 nodes' ROS dependencies are in package.xml, and colcon installs nothing from this list.
 """
 
