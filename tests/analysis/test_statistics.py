@@ -10,6 +10,7 @@ import pytest
 from scipy import stats
 from synthetic_study import AT_0, AT_10, FINALS
 
+from sgim_nodes.analysis.inference import holm
 from sgim_nodes.analysis.statistics import (
     Coverage,
     RunCoverage,
@@ -116,7 +117,12 @@ def test_isolated_region_tests_match_scipy() -> None:
     mwu = stats.mannwhitneyu([n / 1000 for n in (5, 9, 0, 12, 7, 3)],
                              [n / 1000 for n in (0, 0, 1, 0, 0, 0)], alternative="two-sided")
     assert t.own_share_p == pytest.approx(mwu.pvalue) and t.own_share_u == mwu.statistic
-    assert t.significant  # MW p about 0.02
+    assert t.own_share_p < 0.05  # MW p about 0.02 alone, but the table holds 6 p-values:
+    ps = [p for u in tests.values() for p in (u.fisher_p, u.own_share_p)]
+    assert t.own_share_p_holm == pytest.approx(holm(ps)[ps.index(t.own_share_p)])
+    assert t.own_share_p_holm > 0.05 and not t.significant  # after Holm's correction
+    assert t.fisher_min_p == pytest.approx(2 / math.comb(12, 6))  # 6/6 against 0/6
+    assert t.reached_difference.estimate == pytest.approx(4 / 6)
     nothing = tests["saggriac", "random"]
     assert nothing.fisher_p == pytest.approx(1.0) and not nothing.significant
     # Nobody reached it in either: nothing to rank, no difference.

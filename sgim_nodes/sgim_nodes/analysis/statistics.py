@@ -4,19 +4,34 @@ Why these: the paper's claims are comparisons between learners (closer to the be
 wider exploration), so every number comes with its spread over seeds. The interval is t-based
 because a study has few seeds (10), where a normal interval would be too narrow. Two tests
 are given for each pair: Welch's t (means, unequal variances) and Mann-Whitney U (ranks, no
-normality assumed), since final errors of a few seeds are rarely normal. With one run on a side
-there is no spread, so intervals and tests are reported as not applicable (None), not faked.
+normality assumed), since final errors of a few seeds are rarely normal. Each table of tests
+is corrected as one family (Holm), and every p stands beside an effect with its interval and
+the smallest p its test can reach at those n (inference.py). With one run on a side there is
+no spread, so intervals and tests are reported as not applicable (None), not faked.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from itertools import combinations
 
 import numpy as np
 from scipy import stats
 
+from sgim_nodes.analysis.inference import (
+    CONFIDENCE,
+    NO_EFFECT,
+    Effect,
+    cliffs_delta,
+    holm,
+    mann_whitney,
+    min_p_fisher,
+    min_p_mann_whitney,
+    proportion_difference,
+    welch_interval,
+)
 from sgim_nodes.analysis.study import (
     PROCESS_DEMONSTRATION,
     PROCESS_IMITATION,
@@ -26,7 +41,6 @@ from sgim_nodes.analysis.study import (
 )
 from sim_bridge.lake import in_isolated_region
 
-CONFIDENCE = 0.95
 ALPHA = 0.05
 
 
@@ -113,7 +127,11 @@ def final_errors(study: Study) -> dict[str, FinalErrors]:
 
 @dataclass(frozen=True)
 class PairTest:
-    """Final errors of learner a against b; p-values are None when either has < 2 runs."""
+    """Final errors of learner a against b: two tests, each beside its effect and interval.
+    Welch's t with mean(a) - mean(b) and its Welch interval; Mann-Whitney U (exact without
+    ties) with Cliff's delta and its interval, and the smallest p it can reach at these n.
+    The *_holm p-values are corrected over the table the test is part of (pairwise_tests);
+    p-values are None when either side has fewer than 2 runs."""
 
     a: str
     b: str
@@ -125,6 +143,12 @@ class PairTest:
     welch_p: float | None
     mann_whitney_u: float | None
     mann_whitney_p: float | None
+    difference: Effect = NO_EFFECT  # mean(a) - mean(b), Welch interval
+    cliffs_delta: Effect = NO_EFFECT  # -1: every run of a below every one of b
+    mann_whitney_exact: bool = False
+    mann_whitney_min_p: float | None = None  # the exact test's floor at n_a, n_b
+    welch_p_holm: float | None = None
+    mann_whitney_p_holm: float | None = None
 
     @property
     def applicable(self) -> bool:
@@ -132,28 +156,45 @@ class PairTest:
 
     @property
     def significant(self) -> bool:
-        ps = [p for p in (self.welch_p, self.mann_whitney_p) if p is not None]
-        return bool(ps) and max(ps) < ALPHA  # both tests agree
+        """Both corrected p-values below ALPHA (the two tests agree)."""
+        ps = [p for p in (self.welch_p_holm, self.mann_whitney_p_holm) if p is not None]
+        return bool(ps) and max(ps) < ALPHA
 
 
 def _finite(value: float) -> float | None:
     return float(value) if np.isfinite(value) else None
 
 
-def compare(a: str, va: list[float], b: str, vb: list[float]) -> PairTest:
+def compare(a: str, va: Sequence[float], b: str, vb: Sequence[float]) -> PairTest:
+    """One pair, as a table of its own (the corrected p-values are the raw ones)."""
+    va, vb = list(va), list(vb)
     diff = float(np.mean(va) - np.mean(vb))
     closer = a if diff < 0 else b if diff > 0 else ""
+    base = dict(difference=welch_interval(va, vb), cliffs_delta=cliffs_delta(va, vb),
+                mann_whitney_min_p=min_p_mann_whitney(len(va), len(vb)))
     if len(va) < 2 or len(vb) < 2:
-        return PairTest(a, b, len(va), len(vb), diff, closer, None, None, None, None)
+        return PairTest(a, b, len(va), len(vb), diff, closer, None, None, None, None, **base)
     welch = stats.ttest_ind(va, vb, equal_var=False)  # NaN when both sides are constant
-    mwu = stats.mannwhitneyu(va, vb, alternative="two-sided")
-    return PairTest(a, b, len(va), len(vb), diff, closer, _finite(welch.statistic),
-                    _finite(welch.pvalue), float(mwu.statistic), float(mwu.pvalue))
+    u, mw_p, exact = mann_whitney(va, vb)
+    welch_p = _finite(welch.pvalue)
+    return PairTest(a, b, len(va), len(vb), diff, closer, _finite(welch.statistic), welch_p,
+                    u, mw_p, mann_whitney_exact=exact, welch_p_holm=welch_p,
+                    mann_whitney_p_holm=mw_p, **base)
+
+
+def compare_groups(groups: Mapping[str, Sequence[float]],
+                   pairs: Sequence[tuple[str, str]] | None = None) -> list[PairTest]:
+    """The given pairs (default: every pair, in the groups' order) as one table: Holm's
+    correction over all its p-values, Welch's and Mann-Whitney's together."""
+    pairs = list(combinations(list(groups), 2)) if pairs is None else list(pairs)
+    tests = [compare(a, groups[a], b, groups[b]) for a, b in pairs]
+    corrected = holm([p for t in tests for p in (t.welch_p, t.mann_whitney_p)])
+    return [replace(t, welch_p_holm=corrected[2 * k], mann_whitney_p_holm=corrected[2 * k + 1])
+            for k, t in enumerate(tests)]
 
 
 def pairwise_tests(finals: dict[str, FinalErrors]) -> list[PairTest]:
-    return [compare(a, finals[a].values, b, finals[b].values)
-            for a, b in combinations(list(finals), 2)]
+    return compare_groups({k: f.values for k, f in finals.items()})
 
 
 @dataclass
@@ -206,9 +247,11 @@ def isolated_coverage(study: Study) -> dict[str, Coverage]:
 @dataclass(frozen=True)
 class CoverageTest:
     """Do two learners meet the isolated region differently? Two views of the same question:
-    how many runs reach it at all (Fisher's exact test on runs reaching / not reaching), and
-    how much of a run's own exploration lands there (Mann-Whitney U on the per-run share of
-    landings that are the learner's own, imitations and demonstrated actions left out)."""
+    how many runs reach it at all (Fisher's exact test on runs reaching / not reaching, beside
+    the difference of the shares of runs reaching it), and how much of a run's own
+    exploration lands there (Mann-Whitney U on the per-run share of landings that are the
+    learner's own, imitations and demonstrated actions left out, beside Cliff's delta). The
+    *_holm p-values are corrected over the table (coverage_tests)."""
 
     a: str
     b: str
@@ -219,6 +262,12 @@ class CoverageTest:
     fisher_p: float | None
     own_share_u: float | None
     own_share_p: float | None
+    reached_difference: Effect = NO_EFFECT  # Newcombe's interval
+    own_share_delta: Effect = NO_EFFECT  # Cliff's delta of the own shares
+    fisher_min_p: float | None = None
+    own_share_min_p: float | None = None  # the exact Mann-Whitney test's floor
+    fisher_p_holm: float | None = None
+    own_share_p_holm: float | None = None
 
     @property
     def applicable(self) -> bool:
@@ -226,34 +275,42 @@ class CoverageTest:
 
     @property
     def significant(self) -> bool:
+        """Either corrected p-value below ALPHA (the table's correction counts both)."""
         return self.applicable and any(p is not None and p < ALPHA
-                                       for p in (self.fisher_p, self.own_share_p))
+                                       for p in (self.fisher_p_holm, self.own_share_p_holm))
 
 
 def own_share(run: RunCoverage) -> float:
     return run.own_in_region / run.outcomes if run.outcomes else 0.0
 
 
+def _coverage_test(a: Coverage, b: Coverage) -> CoverageTest:
+    na, nb = len(a.runs), len(b.runs)
+    sa, sb = [own_share(r) for r in a.runs], [own_share(r) for r in b.runs]
+    base = dict(reached_difference=proportion_difference(a.runs_reached, na,
+                                                         b.runs_reached, nb),
+                own_share_delta=cliffs_delta(sa, sb), fisher_min_p=min_p_fisher(na, nb),
+                own_share_min_p=min_p_mann_whitney(na, nb))
+    fisher_p = u = mw_p = None
+    if min(na, nb) >= 2:
+        table = [[a.runs_reached, na - a.runs_reached], [b.runs_reached, nb - b.runs_reached]]
+        fisher_p = float(stats.fisher_exact(table).pvalue)
+        if len(set(sa) | set(sb)) > 1:  # all equal (say, all zero): nothing to rank
+            u, mw_p, _ = mann_whitney(sa, sb)
+        else:
+            u, mw_p = float(na * nb / 2), 1.0
+    return CoverageTest(a.learner, b.learner, a.runs_reached, na, b.runs_reached, nb, fisher_p,
+                        u, mw_p, fisher_p_holm=fisher_p, own_share_p_holm=mw_p, **base)
+
+
 def coverage_tests(coverage: dict[str, Coverage]) -> list[CoverageTest]:
-    """Every pair of learners (two-sided tests)."""
-    out = []
-    for a, b in combinations(list(coverage), 2):
-        ca, cb = coverage[a], coverage[b]
-        na, nb = len(ca.runs), len(cb.runs)
-        fisher_p = u = mw_p = None
-        if min(na, nb) >= 2:
-            table = [[ca.runs_reached, na - ca.runs_reached],
-                     [cb.runs_reached, nb - cb.runs_reached]]
-            fisher_p = float(stats.fisher_exact(table).pvalue)
-            sa, sb = [own_share(r) for r in ca.runs], [own_share(r) for r in cb.runs]
-            if len(set(sa) | set(sb)) > 1:  # all equal (say, all zero): nothing to rank
-                mwu = stats.mannwhitneyu(sa, sb, alternative="two-sided")
-                u, mw_p = float(mwu.statistic), float(mwu.pvalue)
-            else:
-                u, mw_p = float(na * nb / 2), 1.0
-        out.append(CoverageTest(a, b, ca.runs_reached, na, cb.runs_reached, nb, fisher_p,
-                                u, mw_p))
-    return out
+    """Every pair of learners (two-sided tests), Holm's correction over all the table's
+    p-values, Fisher's and Mann-Whitney's together."""
+    tests = [_coverage_test(coverage[a], coverage[b])
+             for a, b in combinations(list(coverage), 2)]
+    corrected = holm([p for t in tests for p in (t.fisher_p, t.own_share_p)])
+    return [replace(t, fisher_p_holm=corrected[2 * k], own_share_p_holm=corrected[2 * k + 1])
+            for k, t in enumerate(tests)]
 
 
 @dataclass(frozen=True)
