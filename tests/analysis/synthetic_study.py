@@ -2,15 +2,21 @@
 
 Layout as run_study.sh writes it: <study>/<learner>-seed<N>/bag/ and metadata.yaml.
 Each run has 20 movements, evaluations at 0, 10 and 20, and (for tree learners) region maps.
+Every run's metadata carries a learner fingerprint, by default one shared by all (FINGERPRINT);
+fingerprint(**fields) makes another, and write_run(..., fingerprint=None) a run made before
+fingerprints.
 """
 
 from __future__ import annotations
 
+import hashlib
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import yaml
 
+from sgim_nodes.provenance.fingerprint import Fingerprint, canonical
 from sim_bridge.lake import ISOLATED_REGION
 from tests.bag.samples import T, region, stamp, write_bag
 
@@ -24,12 +30,33 @@ FINALS = {"sgim-d": [0.20, 0.25, 0.30], "random": [0.50, 0.55, 0.65]}
 AT_10 = {"sgim-d": [0.40, 0.44, 0.42], "random": [0.60, 0.61, 0.62]}
 AT_0 = 0.9
 
+FIELDS = {"code": "c0de0000c0de0000", "world": "3071d000", "data": "da7a0000", "numpy": "2.4.6",
+          "scipy": "1.17.1", "pybullet": "3.2.7", "python": "3.11.7",
+          "parameters": "9a7a0000"}
+PARAMETERS = {"learner": {"demonstration_period": 150, "imitations": 5}}
+
+
+def fingerprint(parameters: dict[str, Any] | None = None, **fields: str) -> dict[str, Any]:
+    """A fingerprint's metadata mapping: the shared one, with these fields (and, given
+    ``parameters``, these parameters and a digest of them) changed."""
+    params = PARAMETERS if parameters is None else parameters
+    changed = dict(FIELDS, **fields)
+    if parameters is not None and "parameters" not in fields:
+        changed["parameters"] = hashlib.sha256(canonical(params).encode()).hexdigest()[:16]
+    return Fingerprint(changed, params).to_dict()
+
+
+FINGERPRINT = fingerprint()
+
 
 def movement(index: int, outcome, process: int = 0, status: int = 0):
-    return T["sgim_msgs/msg/Movement"](
+    kind = T["sgim_msgs/msg/Movement"]
+    unsigned = ({"signature": np.zeros(0, dtype=np.uint8)}  # a run made without a key
+                if "signature" in getattr(kind, "__dataclass_fields__", {}) else {})
+    return kind(
         stamp=stamp(index), index=index, process=process, status=status,
         action=np.zeros(24), outcome=np.zeros(0) if outcome is None else np.asarray(outcome),
-        goal=np.zeros(2), goal_index=0, attempt=0)
+        goal=np.zeros(2), goal_index=0, attempt=0, **unsigned)
 
 
 def evaluation(index: int, mean: float):
@@ -77,24 +104,31 @@ def run_messages(learner: str, seed: int, evals: dict[int, float],
 
 
 def write_run(study: Path, learner: str, seed: int, messages: list[tuple[str, object]],
-              duration_s: float = 10.0, **writer_kwargs) -> Path:
+              duration_s: float = 10.0, fingerprint: dict[str, Any] | None = FINGERPRINT,
+              **writer_kwargs) -> Path:
+    """One run folder; ``fingerprint=None``: a run made before fingerprints."""
     run_dir = study / f"{learner}-seed{seed}"
     run_dir.mkdir(parents=True)
     write_bag(run_dir / "bag", messages, **writer_kwargs)
-    (run_dir / "metadata.yaml").write_text(yaml.safe_dump({
-        "learner": learner, "seed": seed, "movements": N_MOVES, "outcome": "finished",
-        "duration_s": duration_s}))
+    meta = {"learner": learner, "seed": seed, "movements": N_MOVES, "outcome": "finished",
+            "duration_s": duration_s}
+    if fingerprint is not None:
+        meta["fingerprint"] = fingerprint
+    (run_dir / "metadata.yaml").write_text(yaml.safe_dump(meta))
     return run_dir
 
 
-def write_study(study: Path, seeds: int = 3, learners: tuple[str, ...] = ("sgim-d", "random")
-                ) -> Path:
-    """sgim-d seed 0 lands in the isolated region at 5 and 12 (own) and 9 (imitation)."""
+def write_study(study: Path, seeds: int = 3, learners: tuple[str, ...] = ("sgim-d", "random"),
+                fingerprints: dict[str, dict[str, Any] | None] | None = None) -> Path:
+    """sgim-d seed 0 lands in the isolated region at 5 and 12 (own) and 9 (imitation).
+    ``fingerprints``: run name -> its fingerprint (None: none), FINGERPRINT for the others."""
+    fingerprints = fingerprints or {}
     for learner in learners:
         for seed in range(seeds):
             evals = {0: AT_0, 10: AT_10[learner][seed], 20: FINALS[learner][seed]}
             inside = {5: 0, 9: 2, 12: 1} if (learner, seed) == ("sgim-d", 0) else {}
             write_run(study, learner, seed,
                       run_messages(learner, seed, evals, inside, maps=learner == "sgim-d"),
-                      duration_s=10.0 + seed)
+                      duration_s=10.0 + seed,
+                      fingerprint=fingerprints.get(f"{learner}-seed{seed}", FINGERPRINT))
     return study
