@@ -39,8 +39,10 @@ def test_cli_writes_every_file(study: Path, tmp_path: Path, capsys: pytest.Captu
     md = (out / "results.md").read_text()
     for heading in ("## Runs", "## Final error", "## Pairwise tests", "## Isolated region"):
         assert heading in md
-    assert "| sgim-d | 3 | 20 | 0.250 |" in md
-    assert "| sgim-d | random | 1/3, 0/3 | 1 |" in md  # the isolated region's tests
+    assert "| sgim-d | 3 | 0 | **0.250** | [0.126, 0.374] |" in md  # no demonstrations
+    assert "mean final error (movement 20)" in md
+    # The isolated region's tests: runs reaching it, their difference, Fisher p (raw, Holm).
+    assert "| sgim-d | random | 1/3, 0/3 | +0.33 [-0.29, +0.79] | 1 | 1 | 0.1 |" in md
 
 
 def test_default_output_folder_and_times(study: Path) -> None:

@@ -41,7 +41,7 @@ def test_report_shows_each_learner_above_the_floor(study: Path, tmp_path: Path,
     assert "above the floor" in md and "| floor (map lookup) |  |  | 0.070 |" in md
     final = md.split("## Final error")[1].split("## ")[0]
     row = next(line for line in final.splitlines() if line.startswith("| sgim-d |"))
-    assert "| 0.250 |" in row and "| 0.180 |" in row  # 0.25 - 0.07
+    assert "| **0.250** |" in row and "| 0.180 |" in row  # 0.25 (the lowest) - 0.07
     results = json.loads((out / "results.json").read_text())
     assert results["floor"]["mean"] == pytest.approx(0.07)
 

@@ -5,7 +5,10 @@ definitions), so the comparison can be redone anywhere, without ROS and without 
 code, and it shows exactly what the node graph did.
 
   study.py       discover the runs, load each bag once into numpy arrays (cached per run)
+  pooling.py     pool only what is alike: the runs' learner fingerprints compared
   statistics.py  means and 95 % intervals over seeds, pairwise tests, isolated-region coverage
+  inference.py   Holm's correction, the smallest reachable p, effect sizes with intervals
   figures.py     error curves, landing histograms, interest-coloured region trees (PNG)
+  report.py      the tables as named Markdown blocks: results.md's and the pages'
   cli.py         `analyze STUDY_DIR`: everything above into PNGs, results.md and results.json
 """

@@ -19,8 +19,16 @@ import numpy as np
 
 from sgim_nodes.analysis import figures
 from sgim_nodes.analysis.export import write_csv
-from sgim_nodes.analysis.floor import FloorSummary, benchmark_floor
+from sgim_nodes.analysis.floor import benchmark_floor
 from sgim_nodes.analysis.pooling import Unlike, mixed_note, refusal, unlike_runs
+from sgim_nodes.analysis.report import (
+    PCT,
+    StudyNumbers,
+    num,
+    render,
+    study_numbers,
+    table,
+)
 from sgim_nodes.analysis.statistics import (
     ALPHA,
     CONFIDENCE,
@@ -29,14 +37,7 @@ from sgim_nodes.analysis.statistics import (
     Curve,
     FinalErrors,
     PairTest,
-    RunSummary,
-    coverage_tests,
     demonstration_times,
-    error_curves,
-    final_errors,
-    isolated_coverage,
-    pairwise_tests,
-    run_summaries,
 )
 from sgim_nodes.analysis.study import CACHE_NAME, Study, discover_runs, load_study
 from sim_bridge.lake import ISOLATED_REGION
@@ -53,9 +54,10 @@ bags alone, and write:
   region_tree.png   interest-coloured leaf regions of sgim-d and saggriac at the same times
   results.md        final errors (mean and 95 % interval, and how far above the benchmark's
                     floor: what a lookup on a dense map of the world achieves), pairwise
-                    tests (Welch's t and Mann-Whitney U), isolated-region coverage with its
-                    pairwise tests (Fisher's exact test on the runs reaching it, Mann-Whitney U
-                    on the share of own landings in it), runs and durations
+                    error along the way, pairwise tests (Welch's t and Mann-Whitney U),
+                    isolated-region coverage with its pairwise tests (Fisher's exact test on
+                    the runs reaching it, Mann-Whitney U on the share of own landings in it),
+                    runs and durations: the blocks that the pages show (analysis/report.py)
   results.json      the same numbers
   evaluations.csv   with --csv: one row per run and evaluation, every setting a column
 Each run is read once, every segment of it (bag/, bag.resume1/, ...), its records validated
@@ -67,7 +69,8 @@ one group that share a seed stop the analysis unless --allow-repeated-seeds. Run
 learner fingerprints differ (code, world, data or library versions across the study, or
 parameters within a group), runs resumed by another learner and runs made before
 fingerprints stop it too (exit 2, naming what differs and which runs hold what) unless
---allow-mixed."""
+--allow-mixed. Every table of tests is Holm-corrected over its p-values, with effect sizes
+and 95 % intervals beside them and the smallest p each test can reach at its n."""
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -146,39 +149,24 @@ def _test_json(t: PairTest | CoverageTest) -> dict:
     return asdict(t) | {"applicable": t.applicable, "significant": t.significant}
 
 
-def results_dict(study: Study, curves: dict[str, Curve], finals: dict[str, FinalErrors],
-                 tests: list[PairTest], coverage: dict[str, Coverage],
-                 summaries: dict[str, RunSummary], written: dict[str, str],
-                 floor: FloorSummary | None = None,
-                 region_tests: list[CoverageTest] | None = None,
+def results_dict(study: Study, numbers: StudyNumbers, written: dict[str, str],
                  mixed: list[Unlike] | None = None) -> dict:
+    n = numbers
     return _clean({
         "mixed": [{"what": u.what, "holders": dict(u.holders)} for u in mixed or []],
-        "floor": asdict(floor) if floor else None,
+        "floor": asdict(n.floor) if n.floor else None,
         "study": shown_path(study.path), "generated": datetime.now(UTC).isoformat(),
-        "confidence": CONFIDENCE, "alpha": ALPHA, "isolated_region": ISOLATED_REGION,
-        "runs": {k: asdict(v) for k, v in summaries.items()}, "skipped": study.skipped,
+        "confidence": CONFIDENCE, "alpha": ALPHA, "correction": "holm (per table)",
+        "isolated_region": ISOLATED_REGION,
+        "runs": {k: asdict(v) for k, v in n.summaries.items()}, "skipped": study.skipped,
         "warnings": study.warnings,
-        "curves": {k: _curve_json(v) for k, v in curves.items()},
-        "final_errors": {k: _final_json(v) for k, v in finals.items()},
-        "tests": [_test_json(t) for t in tests],
-        "isolated_coverage": {k: _coverage_json(v) for k, v in coverage.items()},
-        "isolated_coverage_tests": [_test_json(t) for t in region_tests or []],
+        "curves": {k: _curve_json(v) for k, v in n.curves.items()},
+        "final_errors": {k: _final_json(v) for k, v in n.finals.items()},
+        "tests": [_test_json(t) for t in n.tests],
+        "isolated_coverage": {k: _coverage_json(v) for k, v in n.coverage.items()},
+        "isolated_coverage_tests": [_test_json(t) for t in n.region_tests],
         "figures": written,
     })
-
-
-def _num(value: float | None, digits: int = 3) -> str:
-    return "n/a" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
-
-
-def _p(value: float | None) -> str:
-    return "n/a" if value is None else f"{value:.2g}" if value >= 1e-3 else f"{value:.1e}"
-
-
-def _table(header: list[str], rows: list[list[str]]) -> list[str]:
-    return ["| " + " | ".join(header) + " |", "|" + "---|" * len(header),
-            *("| " + " | ".join(r) + " |" for r in rows), ""]
 
 
 def shown_path(path: Path) -> str:
@@ -191,76 +179,42 @@ def shown_path(path: Path) -> str:
         return str(full)
 
 
-def results_markdown(study: Study, finals: dict[str, FinalErrors], tests: list[PairTest],
-                     coverage: dict[str, Coverage], summaries: dict[str, RunSummary],
-                     written: dict[str, str], floor: FloorSummary | None = None,
-                     region_tests: list[CoverageTest] | None = None,
-                     mixed: list[Unlike] | None = None) -> str:
-    pct = round(CONFIDENCE * 100)
+def results_markdown(study: Study, numbers: StudyNumbers, written: dict[str, str],
+                     mixed: list[Unlike] | None = None, points: list[int] | None = None) -> str:
+    """results.md: its tables are report.render's blocks, those the pages show."""
+    blocks = render(numbers, points)
     out = [mixed_note(mixed), ""] if mixed else []
     out += [f"# Study results: {shown_path(study.path)}", "",
-           "Generated by `analyze` from the bags alone. Intervals are two-sided "
-           f"t intervals at {pct} % over seeds (n/a with one run).", ""]
-    out += ["## Runs", "", *_table(
+            "Generated by `analyze` from the bags alone. Intervals are two-sided "
+            f"t intervals at {PCT} % over seeds (n/a with one run).", ""]
+    out += ["## Runs", "", *table(
         ["learner", "runs", "finished", "seeds", "movements", "demonstrations per run",
          "total duration (s)", "mean duration (s)"],
         [[s.learner, str(s.runs), str(s.finished), ", ".join(map(str, s.seeds)),
           ", ".join(sorted(set(map(str, s.movements)), key=int)),
           ", ".join(map(str, s.demonstrations)),
-          _num(s.total_duration_s, 1), _num(s.mean_duration_s, 1)]
-         for s in summaries.values()])]
+          num(s.total_duration_s, 1), num(s.mean_duration_s, 1)]
+         for s in numbers.summaries.values()])]
     if study.skipped:
         out += ["Skipped runs:", ""] + [f"- {k}: {v}" for k, v in study.skipped.items()] + [""]
     out += ["## Final error", "",
             "Mean distance to the benchmark goals at each run's last evaluation "
-            "(outcome units; lower is better).", ""]
-    if floor:
+            "(outcome units; lower is better; the lowest mean in bold).", ""]
+    if numbers.floor:
         out += ["Beside each learner, how far it is from what is possible: the "
-                f"{floor.describe()}.", ""]
-    above = [] if floor is None else ["above the floor"]
-    out += _table(
-        ["learner", "n", "at movement", "mean", f"{pct} % interval", *above, "per seed"],
-        [[f.learner, str(f.interval.n), ", ".join(sorted(set(map(str, f.movements)), key=int)),
-          _num(f.interval.mean), f"[{_num(f.interval.low)}, {_num(f.interval.high)}]",
-          *([] if floor is None else [_num(f.interval.mean - floor.mean)]),
-          ", ".join(f"{v:.3f}" for v in f.values)] for f in finals.values()]
-        + ([] if floor is None else [["floor (map lookup)", "", "", _num(floor.mean), "", "",
-                                      ""]]))
-    out += ["## Pairwise tests of final errors", "",
-            f"Two-sided Welch's t-test and Mann-Whitney U; 'significant' when both p < {ALPHA}. "
-            "n/a when a learner has fewer than 2 runs.", ""]
-    out += _table(
-        ["a", "b", "mean(a) - mean(b)", "closer", "Welch t", "Welch p", "MW U", "MW p",
-         "significant"],
-        [[t.a, t.b, _num(t.mean_difference), t.closer or "tie", _num(t.welch_t, 2),
-          _p(t.welch_p), _num(t.mann_whitney_u, 1), _p(t.mann_whitney_p),
-          ("yes" if t.significant else "no") if t.applicable else "n/a"] for t in tests])
+                f"{numbers.floor.describe()}.", ""]
+    out += [blocks["final-errors"], "", "Along the way (mean over seeds; the lowest of each "
+            "column in bold):", "", blocks["error-curve"], ""]
+    out += ["## Pairwise tests of final errors", "", blocks["pairwise"], ""]
     centre = ", ".join(f"{v:.3g}" for v in ISOLATED_REGION["centre"])
     out += ["## Isolated region coverage", "",
             f"Isolated region: centre ({centre}), radius {ISOLATED_REGION['radius']:.3g} "
-            "(normalised outcome units). Share: the run's valid landings that fall in it; "
-            "'own' excludes imitations and demonstrated actions.", ""]
-    out += _table(
-        ["learner", "runs reaching it", "share (mean)", f"share {pct} % interval",
-         "landings in it per run", "own per run", "first movement per run", "median first"],
-        [[c.learner, f"{c.runs_reached}/{len(c.runs)}", _num(c.share.mean, 4),
-          f"[{_num(c.share.low, 4)}, {_num(c.share.high, 4)}]",
-          ", ".join(str(r.in_region) for r in c.runs),
-          ", ".join(str(r.own_in_region) for r in c.runs),
-          ", ".join("never" if r.first_movement is None else str(r.first_movement)
-                    for r in c.runs), _num(c.first_movement_median, 0)]
-         for c in coverage.values()])
-    if region_tests:
-        out += ["Does one learner meet the isolated region more than another? Fisher's exact "
-                "test on the runs reaching it, and Mann-Whitney U on each run's share of its own "
-                f"landings there (two-sided; 'significant' when either p < {ALPHA}).", ""]
-        out += _table(
-            ["a", "b", "runs reaching it (a, b)", "Fisher p", "own share MW U", "MW p",
-             "significant"],
-            [[t.a, t.b, f"{t.reached_a}/{t.runs_a}, {t.reached_b}/{t.runs_b}", _p(t.fisher_p),
-              _num(t.own_share_u, 1), _p(t.own_share_p),
-              ("yes" if t.significant else "no") if t.applicable else "n/a"]
-             for t in region_tests])
+            "(normalised outcome units). Share: the run's valid landings that fall in it "
+            "(mean over runs, in %); 'own' excludes imitations and demonstrated actions.", "",
+            blocks["isolated-coverage"], ""]
+    if numbers.region_tests:
+        out += ["Does one learner meet the isolated region more than another?", "",
+                blocks["isolated-tests"], ""]
     out += ["## Figures", ""] + [f"- [{name}]({name})" for name in written.values()] + [""]
     if study.warnings:
         out += ["## Warnings", ""] + [f"- {w}" for w in study.warnings] + [""]
@@ -324,31 +278,23 @@ def run(args: argparse.Namespace) -> int:
     times = sorted(set(args.times)) if args.times else default_times(study)
     print(f"[analyze] statistics over {len(study.runs)} runs of "
           f"{', '.join(study.learners)}; frames at movements {times}", file=sys.stderr)
-    curves, finals = error_curves(study), final_errors(study)
-    tests, coverage, summaries = pairwise_tests(finals), isolated_coverage(study), \
-        run_summaries(study)
-    region_tests = coverage_tests(coverage)
+    numbers = study_numbers(study, benchmark_floor())
     written: dict[str, str] = {}
-    floor = benchmark_floor()
     print("[analyze] drawing figures", file=sys.stderr)
-    if curves:
+    if numbers.curves:
         written["error_curves"] = figures.plot_error_curves(
-            curves, out / "error_curves.png", floor.mean if floor else None,
-            demonstration_times(study)).name
+            numbers.curves, out / "error_curves.png",
+            numbers.floor.mean if numbers.floor else None, demonstration_times(study)).name
     written["landings"] = figures.plot_landings(study, times, out / "landings.png").name
     written["landings_frames"] = figures.plot_landings(
         study, times, out / "landings_frames.png", cumulative=False).name
     tree = figures.plot_region_trees(study, times, out / "region_tree.png", args.tree_seed)
     if tree is not None:
         written["region_tree"] = tree.name
-    (out / "results.md").write_text(
-        results_markdown(study, finals, tests, coverage, summaries, written, floor,
-                         region_tests, mixed),
-        encoding="utf-8")
+    (out / "results.md").write_text(results_markdown(study, numbers, written, mixed),
+                                    encoding="utf-8")
     (out / "results.json").write_text(json.dumps(
-        results_dict(study, curves, finals, tests, coverage, summaries, written, floor,
-                     region_tests, mixed),
-        indent=1), encoding="utf-8")
+        results_dict(study, numbers, written, mixed), indent=1), encoding="utf-8")
     tables = ["results.md", "results.json"]
     if args.csv:
         tables.append(write_csv(study, out / "evaluations.csv").name)
