@@ -188,9 +188,10 @@ class FishingWorld:
         pb.setPhysicsEngineParameter(fixedTimeStep=self.time_step, numSubSteps=0,
                                      physicsClientId=c)
         # Dantzig's pivoting solves the step's MLCP exactly. Measured against the converged
-        # solver (MLCP, 300 Gauss-Seidel sweeps): touch-downs within 1e-12, where the previous
+        # solver (MLCP, 300 Gauss-Seidel sweeps): touch-downs within 1e-11, where the previous
         # 50 Gauss-Seidel sweeps were up to 0.0028 off; measure_world.py's learnability figures
-        # identical to the fourth decimal; 10-15 % more casts per second (README_world.md).
+        # identical to the last printed digit; 13-15 % more casts per second (104.8 against
+        # 92.8 casts/s, 2026-12-04, AMD EPYC; README_world.md, Constraint solver and Speed).
         with _quiet_c_stdout():  # pybullet prints "switched solver" from C
             pb.setPhysicsEngineParameter(constraintSolverType=pb.CONSTRAINT_SOLVER_LCP_DANTZIG,
                                          numSolverIterations=SOLVER_ITERATIONS,

@@ -238,7 +238,7 @@ def test_one_array_servo_call_equals_six_single_calls() -> None:
 def test_constraint_solver_is_converged(actions: np.ndarray) -> None:
     """The servos' and the rod friction's constraints are solved exactly (Dantzig's pivoting):
     the touch-downs of a solver run to convergence (MLCP, 300 Gauss-Seidel sweeps) are the same
-    to 1e-9 (measured 1e-14 on these casts; README_world.md: 1e-12 over 100; the previous
+    to 1e-9 (measured 1e-14 on these casts; README_world.md: 8e-12 over 100; the previous
     solver, 50 sweeps, up to 0.0028, and pybullet's default up to 0.108). Switching the
     solver prints on C's stdout, silenced as the world does."""
     import pybullet as pb
