@@ -268,3 +268,136 @@ def test_the_runner_demonstrates_what_the_choice_rule_picks(choice):
         best = d[unreached].max() if choice == FARTHEST_UNREACHED else d[unreached].min()
         assert demo["teaching_index"] in unreached
         assert d[demo["teaching_index"]] == best
+
+
+# --- the turn's checks (issue 31: the teacher's checks are recorded) -------------------------
+
+
+def _arm_learner_after(movements: int, seed: int = 0):
+    """The planar arm's world and an SGIM-D learner that made `movements` movements in it."""
+    from sgim_nodes.core import runner
+
+    world = runner.build_world("planar-arm", seed)
+    learner = make_learner("sgim-d", world.env.action_dim, 2, seed, None, world.scale)
+    for _ in range(movements):
+        a, _label = learner.next_action()
+        learner.observe(a, world.env.execute(a))
+    return world, learner
+
+
+@pytest.mark.parametrize("rule", [ABILITY, OWN_MOVEMENTS])
+@pytest.mark.parametrize("choice", TEACHER_CHOICES)
+def test_a_turn_s_checks_reproduce_its_unreached_set_and_its_decision(rule, choice):
+    """On the planar arm a turn returns one check per teaching goal, whose verdicts are the
+    unreached set measured independently, and from which the decision is redone: the entries
+    its distances allow (distance > tolerance, the choice rule), and the draw with the same
+    stream. The teacher's world is noise-free, so a second cast lands where the first did."""
+    from sgim_nodes.core.teaching import Check, eligible
+
+    world, learner = _arm_learner_after(120)
+    tolerance = 0.05
+    goals, actions = world.teaching_outcomes, world.teaching_actions
+
+    def progress():
+        return learner_progress(rule, learner.inverse, learner.own_outcomes,
+                                world.make_teacher_env() if rule == ABILITY else None)
+
+    turn = Teacher(actions, goals, np.random.default_rng(5), tolerance=tolerance,
+                   choice=choice).decide(progress())
+    assert [c.index for c in turn.checks] == list(range(len(goals)))
+    own = learner.own_outcomes()
+    for check in turn.checks:
+        assert isinstance(check, Check) and np.array_equal(check.goal, goals[check.index])
+        if rule == ABILITY:  # the learner's action, and where the arm lands it
+            assert np.array_equal(check.action, learner.inverse(check.goal))
+            assert np.allclose(check.landed, world.env.forward(check.action), atol=1e-12)
+            assert check.own_outcomes == 0
+        else:  # no cast: the learner's own outcome nearest the goal
+            assert check.action is None and check.own_outcomes == len(own)
+            assert any(np.array_equal(check.landed, y) for y in own)
+            assert check.distance == np.linalg.norm(own - check.goal, axis=1).min()
+        assert check.distance == pytest.approx(np.linalg.norm(check.landed - check.goal),
+                                               abs=1e-12)
+        assert check.reached == (check.distance <= check.tolerance == tolerance)
+    # The verdicts are the unreached set the teacher measures afresh.
+    unreached = Teacher(actions, goals, np.random.default_rng(0),
+                        tolerance=tolerance).unreached(progress())
+    assert [c.index for c in turn.checks if not c.reached] == unreached.tolist()
+    assert 0 < len(unreached) < len(goals)  # both verdicts are part of what is tested
+    # The decision, redone from the checks alone: what they allow, drawn as the teacher draws.
+    pool = eligible(np.array([c.distance for c in turn.checks]), tolerance, choice)
+    assert set(pool) <= set(unreached)
+    assert turn.chosen == int(np.random.default_rng(5).choice(pool))
+    assert np.array_equal(turn.demonstration.action, actions[turn.chosen])
+
+
+def test_an_answer_s_checks_redo_it_and_a_silent_turn_s_say_why():
+    from sgim_nodes.core.teaching import eligible
+
+    world, learner = _arm_learner_after(120)
+    goals = world.teaching_outcomes
+    ability = learner_progress(ABILITY, learner.inverse, learner.own_outcomes,
+                               world.make_teacher_env())
+    asked = np.array([0.3, -0.2])
+    turn = Teacher(world.teaching_actions, goals, np.random.default_rng(2),
+                   tolerance=0.05).decide(ability, asked)
+    assert np.array_equal(turn.asked, asked)
+    pool = eligible(np.array([c.distance for c in turn.checks]), 0.05, RANDOM_UNREACHED,
+                    np.array([c.goal for c in turn.checks]), asked)
+    unreached = [c.index for c in turn.checks if not c.reached]
+    gap = np.linalg.norm(goals[unreached] - asked, axis=1)
+    assert pool.tolist() == np.array(unreached)[gap == gap.min()].tolist()
+    assert turn.chosen == int(np.random.default_rng(2).choice(pool))
+    # Every goal within a lenient tolerance: silent, and every check says it was reached.
+    silent = Teacher(world.teaching_actions, goals, np.random.default_rng(2),
+                     tolerance=10.0).decide(ability)
+    assert silent.demonstration is None and silent.chosen == -1
+    assert all(c.reached for c in silent.checks) and len(silent.checks) == len(goals)
+    # Nothing reached at all: every distance infinite, nothing landed.
+    empty = Teacher(world.teaching_actions, goals, np.random.default_rng(2)).decide(
+        np.empty((0, 2)))
+    assert all(c.distance == np.inf and c.landed is None and not c.reached
+               for c in empty.checks)
+
+
+def test_the_runner_writes_each_turn_s_checks_and_they_redo_its_demonstrations():
+    """The runner's "teacher_check" records, one per teaching goal before each turn's
+    demonstration, redo every turn from the run's seed: the entry shown, or the silence."""
+    import json
+
+    from sgim_nodes.core import runner
+    from sgim_nodes.core.random_streams import component_rng
+    from sgim_nodes.core.teaching import eligible
+
+    seed, period, movements = 1, 30, 300
+    world = runner.build_world("planar-arm", seed)
+    learner = runner.make_learner("sgim-d", 12, 2, seed, None, world.scale)
+    records: list[dict] = []
+    runner.run(learner, world, movements, 0, seed, records.append, teacher_period=period,
+               teacher_tolerance_noise=20.0)  # lenient: 3 of the 10 turns are silent
+    assert all(json.loads(json.dumps(r, allow_nan=False)) == r for r in records)  # plain JSON
+    checks = [r for r in records if r["type"] == "teacher_check"]
+    shown = {r["movement"]: r["teaching_index"] for r in records
+             if r["type"] == "demonstration"}
+    n = len(world.teaching_outcomes)
+    assert len(checks) == n * len(range(0, movements, period))
+    rng = component_rng(seed, "teacher")
+    silent = 0
+    for start in range(0, len(checks), n):
+        turn = checks[start: start + n]
+        k = turn[0]["movement"]
+        assert [c["movement"] for c in turn] == [k] * n
+        assert [c["teaching_index"] for c in turn] == list(range(n))
+        distances = np.array([np.inf if c["distance"] is None else c["distance"]
+                              for c in turn])
+        assert [c["reached"] for c in turn] == (distances <= turn[0]["tolerance"]).tolist()
+        pool = eligible(distances, turn[0]["tolerance"], turn[0]["choice"])
+        expected = int(rng.choice(pool)) if len(pool) else None
+        assert shown.get(k) == expected, k
+        assert [c["teaching_index"] for c in turn if c["chosen"]] == (
+            [] if expected is None else [expected])
+        silent += expected is None
+        # Written before the turn's demonstration, after the movement before it.
+        at = records.index(turn[0])
+        assert records[at - 1]["type"] != "movement" or records[at - 1]["index"] == k - 1
+    assert 0 < silent < movements // period  # silences and demonstrations both redone

@@ -1,8 +1,10 @@
 """Single-process runner: one learner, one world, no ROS.
 
-Used by tests, benchmarks and to compare with the ROS graph.  Every movement, demonstration
-and evaluation is written as one JSON line and flushed at once, so a killed run keeps all it
-did.  The loop itself (``run``) writes through a callback so tests can keep records in memory.
+Used by tests, benchmarks and to compare with the ROS graph.  Every movement, demonstration,
+teacher's check ("teacher_check": one per teaching goal at each turn, as the graph's
+teacher_checks) and evaluation is written as one JSON line and flushed at once, so a killed
+run keeps all it did.  The loop itself (``run``) writes through a callback so tests can keep
+records in memory.
 
 Example:
     python -m sgim_nodes.core.runner --learner sgim-d --movements 5000 --seed 3 \
@@ -48,6 +50,7 @@ from .teaching import (
     REACHED_RULES,
     TEACHER_CHOICES,
     Teacher,
+    Turn,
     check_choice,
     check_content,
     check_rule,
@@ -133,6 +136,18 @@ def _vec(x: np.ndarray | None) -> list[float] | None:
     return None if x is None else [float(v) for v in np.asarray(x).ravel()]
 
 
+def check_records(turn: Turn, movement: int, ask: int, rule: str, choice: str
+                  ) -> list[dict[str, Any]]:
+    """A teacher's turn as "teacher_check" records, one per teaching goal, written before its
+    demonstration: what TeacherCheck messages carry in the graph's bag (teacher_checks), so an
+    auditor redoes the turn from them alone (teaching.eligible) and compares both."""
+    common = {"type": "teacher_check", "movement": movement, "help_request": ask,
+              "asked_goal": _vec(turn.asked), "rule": rule, "choice": choice,
+              "entries": len(turn.checks)}
+    return [{**common, **check.to_dict(), "chosen": check.index == turn.chosen}
+            for check in turn.checks]
+
+
 def run(learner: Learner, world: World, movements: int, eval_every: int,
         seed: int, write: Callable[[dict[str, Any]], None],
         teacher_period: int = 150, teacher_tolerance_noise: float = DEFAULT_TOLERANCE_NOISE,
@@ -197,22 +212,26 @@ def _run(learner: Learner, world: World, movements: int, eval_every: int,
     for i in range(movements):
         if eval_every > 0 and i % eval_every == 0:
             evaluate(i)
-        demo, asked = None, None
+        turn, asked, ask = None, None, 0
         if teacher is not None and requests is None and teacher.due(i):
             learner.on_teacher_turn()
-            demo = teacher.choose(learner_progress(teacher_rule, learner.inverse,
+            turn = teacher.decide(learner_progress(teacher_rule, learner.inverse,
                                                    learner.own_outcomes, teacher_env))
         elif requests is not None and requests.should_ask(i):
             asked = learner.last_attempt_goal
             requests.asked()
+            ask = requests.asks
             # The ask ends the goal attempt under way, answered or not, as a teacher's turn
             # does: the graph's arbiter must stop the running job to ask before it knows
             # whether the teacher will show anything (nodes/help_asks.py).
             learner.on_teacher_turn()
-            write({"type": "help_request", "movement": i, "ask": requests.asks,
-                   "goal": _vec(asked)})
-            demo = teacher.answer(asked, learner_progress(teacher_rule, learner.inverse,
-                                                          learner.own_outcomes, teacher_env))
+            write({"type": "help_request", "movement": i, "ask": ask, "goal": _vec(asked)})
+            turn = teacher.decide(learner_progress(teacher_rule, learner.inverse,
+                                                   learner.own_outcomes, teacher_env), asked)
+        demo = None if turn is None else turn.demonstration
+        if turn is not None:
+            for record in check_records(turn, i, ask, teacher_rule, teacher.choice):
+                write(record)
         if demo is not None:
             action, outcome = demo.shown(content)
             learner.on_demonstration(action, outcome)

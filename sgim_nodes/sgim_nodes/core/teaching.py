@@ -29,6 +29,13 @@ paper's teacher knows the learner's state, so it may ask the learner itself. Two
 The tolerance is a multiple of the world's outcome noise (``DEFAULT_TOLERANCE_NOISE``). When
 every goal is reached the teacher gives nothing at that turn.
 
+Each turn's judgement is kept (issue 31): ``Teacher.decide`` returns a ``Turn`` holding one
+``Check`` per teaching goal (the goal, the action the learner's inverse model gave, where the
+teacher's world landed it or the learner's own outcome nearest it, the distance, the tolerance,
+the verdict) and what it showed. The graph's teacher publishes them (TeacherCheck on
+``teacher_checks``) and the runner writes them, so that an auditor redoes every turn from its
+checks alone: ``eligible`` gives the entries the teacher drew among, from the distances only.
+
 Which unreached goal (``TEACHER_CHOICES``, issue 14; the paper's Section III lists the teacher's
 choice among "a random one among the unreached goals", its own, and leaves the others to future
 work): ``random-unreached`` (the paper's), ``farthest-unreached`` (the goal the learner's
@@ -45,7 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import portable
-from .environment import Environment
+from .environment import Environment, Status
 from .evaluator import landing_point
 
 PAPER_PERIOD = 150
@@ -87,9 +94,116 @@ class Demonstration:
                 None if content == MEANS_ONLY else self.outcome.copy())
 
 
+@dataclass(frozen=True)
+class Cast:
+    """One cast of the ``ability`` rule: the action the learner's inverse model gave for a goal,
+    the cast's status in the teacher's world, where it came down (None: never) and how far
+    from the goal (inf when it never came down)."""
+
+    action: np.ndarray
+    status: int
+    landed: np.ndarray | None
+    distance: float
+
+
+class CastMeasure:
+    """The ``ability`` rule's measure: called with a goal, how far from it the action
+    ``inverse`` gives for it lands when cast in ``world`` (the teacher's own); ``cast`` keeps
+    the whole cast, for the turn's checks. A cast that comes down on land is measured to its
+    touch-down, as the evaluator measures it; one that never comes down is infinitely far."""
+
+    def __init__(self, inverse: Callable[[np.ndarray], np.ndarray], world: Environment) -> None:
+        self.inverse = inverse
+        self.world = world
+
+    def cast(self, goal: np.ndarray) -> Cast:
+        action = np.asarray(self.inverse(goal), dtype=float)
+        result = self.world.execute(action)
+        point = landing_point(result)
+        distance = np.inf if point is None else portable.norm(point - goal)
+        return Cast(action, int(result.status), point, distance)
+
+    def __call__(self, goal: np.ndarray) -> float:
+        return self.cast(goal).distance
+
+
 # The learner's progress, as either its reached outcomes (K, m) or a callable giving the
-# distance from a goal to the learner's closest reached outcome.
+# distance from a goal to the learner's closest reached outcome (a CastMeasure under the
+# ``ability`` rule).
 Reached = np.ndarray | Callable[[np.ndarray], float]
+
+
+@dataclass(frozen=True)
+class Check:
+    """One teaching goal judged at one turn: enough to redo the verdict without the learner or
+    the teacher's world (``distance <= tolerance``; TeacherCheck.msg says it for the bag).
+
+    ``ability``: ``action`` is what the learner's inverse model gave, ``status`` and ``landed``
+    the cast's in the teacher's world. ``own-movements``: no cast (``action`` None, ``status``
+    OK); ``landed`` is the learner's own outcome nearest the goal among ``own_outcomes`` of
+    them, recomputable from the run's movements. ``landed`` None: nothing came down."""
+
+    index: int  # row of the teaching set
+    goal: np.ndarray
+    distance: float
+    tolerance: float
+    action: np.ndarray | None = None
+    status: int = Status.OK
+    landed: np.ndarray | None = None
+    own_outcomes: int = 0
+
+    @property
+    def reached(self) -> bool:
+        """The verdict, as the teacher decides it (a goal is unreached when farther)."""
+        return not self.distance > self.tolerance
+
+    def to_dict(self) -> dict:
+        """Plain JSON (the runner's "teacher_check" records): an infinite distance is null."""
+        def vec(x: np.ndarray | None) -> list[float] | None:
+            return None if x is None else [float(v) for v in np.asarray(x).ravel()]
+
+        return {"teaching_index": self.index, "goal": vec(self.goal), "action": vec(self.action),
+                "status": int(self.status), "landed": vec(self.landed),
+                "own_outcomes": self.own_outcomes,
+                "distance": float(self.distance) if np.isfinite(self.distance) else None,
+                "tolerance": float(self.tolerance), "reached": self.reached}
+
+
+@dataclass(frozen=True)
+class Turn:
+    """One decision of the teacher: every check it made, in teaching-set order, what it shows
+    (None: it is silent, every goal reached) and the goal a learner asked about, if any."""
+
+    checks: tuple[Check, ...]
+    demonstration: Demonstration | None
+    asked: np.ndarray | None = None
+
+    @property
+    def chosen(self) -> int:
+        """The teaching-set row shown, -1 when silent."""
+        return -1 if self.demonstration is None else self.demonstration.index
+
+
+def eligible(distances: np.ndarray, tolerance: float, choice: str,
+             goals: np.ndarray | None = None, asked: np.ndarray | None = None) -> np.ndarray:
+    """The teaching-set rows a turn draws among (at random, with the teacher's stream), from
+    its checks alone: the unreached ones (``distance > tolerance``), narrowed by ``choice``
+    (the farthest or nearest), or, answering an ask about ``asked``, to those whose goal lies
+    nearest it. Empty: the teacher is silent. ``distances`` and ``goals`` in teaching-set
+    order, every row of the set."""
+    d = np.asarray(distances, dtype=float)
+    candidates = np.flatnonzero(d > tolerance)
+    if len(candidates) == 0:
+        return candidates
+    if asked is not None:
+        gap = np.linalg.norm(np.asarray(goals, dtype=float)[candidates]
+                             - np.asarray(asked, dtype=float), axis=1)
+        return candidates[gap == gap.min()]
+    if check_choice(choice) == FARTHEST_UNREACHED:
+        return candidates[d[candidates] == d[candidates].max()]
+    if choice == NEAREST_UNREACHED:
+        return candidates[d[candidates] == d[candidates].min()]
+    return candidates
 
 
 class Teacher:
@@ -131,30 +245,52 @@ class Teacher:
         """Indices of teaching goals farther than ``tolerance`` from every reached outcome."""
         return np.flatnonzero(self.distances(reached) > self.tolerance)
 
+    def judge(self, reached: Reached) -> tuple[Check, ...]:
+        """One check per teaching goal, in order: the distances of ``distances``, with what
+        they were measured to (a CastMeasure's casts, the nearest reached outcome)."""
+        if isinstance(reached, CastMeasure):
+            casts = [reached.cast(y) for y in self.outcomes]
+            return tuple(Check(i, y, c.distance, self.tolerance, c.action, c.status, c.landed)
+                         for i, (y, c) in enumerate(zip(self.outcomes, casts, strict=True)))
+        if callable(reached):
+            return tuple(Check(i, y, float(reached(y)), self.tolerance)
+                         for i, y in enumerate(self.outcomes))
+        r = np.asarray(reached, dtype=float).reshape(-1, self.outcomes.shape[1])
+        if len(r) == 0:
+            return tuple(Check(i, y, np.inf, self.tolerance)
+                         for i, y in enumerate(self.outcomes))
+        # As distances() computes them, bit for bit: the choice compares them for ties.
+        d = np.sqrt(((self.outcomes[:, None, :] - r[None, :, :]) ** 2).sum(-1))
+        nearest = d.argmin(1)
+        return tuple(Check(i, y, float(d[i, j]), self.tolerance, landed=r[j].copy(),
+                           own_outcomes=len(r))
+                     for i, (y, j) in enumerate(zip(self.outcomes, nearest, strict=True)))
+
+    def decide(self, reached: Reached, asked: np.ndarray | None = None) -> Turn:
+        """A turn: every goal judged, then the demonstration ``eligible`` allows, drawn at
+        random (None if every goal is reached). ``asked``: the goal a learner asked about
+        (help_request.py), which narrows the draw to the entries nearest it instead of
+        ``choice``."""
+        checks = self.judge(reached)
+        asked = None if asked is None else np.asarray(asked, dtype=float)
+        candidates = eligible(np.array([c.distance for c in checks]), self.tolerance,
+                              self.choice, self.outcomes, asked)
+        if len(candidates) == 0:
+            return Turn(checks, None, asked)
+        i = int(self.rng.choice(candidates))
+        return Turn(checks, Demonstration(i, self.actions[i].copy(), self.outcomes[i].copy()),
+                    asked)
+
     def choose(self, reached: Reached) -> Demonstration | None:
         """An unreached demonstration picked by ``choice``, or None if every goal is
         reached."""
-        d = self.distances(reached)
-        candidates = np.flatnonzero(d > self.tolerance)
-        if len(candidates) == 0:
-            return None
-        if self.choice == FARTHEST_UNREACHED:
-            candidates = candidates[d[candidates] == d[candidates].max()]
-        elif self.choice == NEAREST_UNREACHED:
-            candidates = candidates[d[candidates] == d[candidates].min()]
-        i = int(self.rng.choice(candidates))
-        return Demonstration(i, self.actions[i].copy(), self.outcomes[i].copy())
+        return self.decide(reached).demonstration
 
     def answer(self, goal: np.ndarray, reached: Reached) -> Demonstration | None:
         """A learner asked for help with ``goal`` (help_request.py): the unreached teaching
         entry whose outcome lies nearest it (ties at random), or None if every goal is
         reached."""
-        candidates = self.unreached(reached)
-        if len(candidates) == 0:
-            return None
-        gap = np.linalg.norm(self.outcomes[candidates] - np.asarray(goal, dtype=float), axis=1)
-        i = int(self.rng.choice(candidates[gap == gap.min()]))
-        return Demonstration(i, self.actions[i].copy(), self.outcomes[i].copy())
+        return self.decide(reached, goal).demonstration
 
 
 def check_choice(choice: str) -> str:
@@ -177,16 +313,10 @@ def check_rule(rule: str) -> str:
 
 
 def cast_distance(inverse: Callable[[np.ndarray], np.ndarray],
-                  world: Environment) -> Callable[[np.ndarray], float]:
-    """The ``ability`` rule's measure: goal -> how far from it the action ``inverse`` gives
-    for it lands when cast in ``world`` (the teacher's own). A cast that comes down on land
-    is measured to its touch-down, as the evaluator measures it; one that never comes down is
-    infinitely far."""
-    def distance(goal: np.ndarray) -> float:
-        point = landing_point(world.execute(np.asarray(inverse(goal), dtype=float)))
-        return np.inf if point is None else portable.norm(point - goal)
-
-    return distance
+                  world: Environment) -> CastMeasure:
+    """The ``ability`` rule's measure (CastMeasure): goal -> how far from it the action
+    ``inverse`` gives for it lands when cast in ``world`` (the teacher's own)."""
+    return CastMeasure(inverse, world)
 
 
 def learner_progress(rule: str, inverse: Callable[[np.ndarray], np.ndarray],
