@@ -222,7 +222,8 @@ class TeachingLibrary:
         return SendDemonstration(
             action, outcome, ts_index,
             f"for goal {fmt(goal)}: the action of {source}, outcome {fmt(outcome)} "
-            f"({distance:.3f} from the goal, reliability {estimate.reliability:.3f})")
+            f"({distance:.3f} from the goal; cost {estimate.reliability:.3f} = distance + "
+            f"{c.alpha:g} x variance of its neighbours' actions, lower is better)")
 
 
 def refuse_if_over(state: LearnerState) -> None:

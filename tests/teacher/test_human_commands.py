@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -212,6 +214,15 @@ def test_goal_picks_a_teaching_entry_when_it_is_the_most_reliable(library, state
     assert demo.teaching_set_index == 1
     assert np.array_equal(demo.action, ACTIONS[1]) and np.array_equal(demo.outcome, OUTCOMES[1])
     assert "teaching-set entry 1" in demo.text and "0.050 from the goal" in demo.text
+
+
+def test_an_offer_calls_its_rank_a_cost_where_lower_is_better(library, state):
+    """The paper's 'reliability' is a cost (distance + alpha x action variance): printed as
+    "reliability 0.391" at the prompt and on the page, it read as higher is better."""
+    text = library.decide(GoalPoint((0.45, 0.5)), state).text
+    assert "reliability" not in text
+    assert re.search(r"; cost \d\.\d{3} = distance \+ 0\.5 x variance of its neighbours' "
+                     r"actions, lower is better\)$", text), text
 
 
 def test_goal_picks_a_learner_movement_and_says_which(library, state):
