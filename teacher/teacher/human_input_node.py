@@ -9,7 +9,8 @@ line editing and history when stdin is a terminal; history in ~/.sgim_teacher_hi
 a second thread spins the node (``spin_once`` in a loop; EventsExecutor hung in tests here).
 One lock keeps them from touching the node's state at once. What the graph says while the
 person types (the teacher's turn, a pause, a refused demonstration, progress every 10 %, the
-end of the run) is printed above the prompt, which is redrawn with what was being typed. When
+end of the run) is printed above the prompt, which is redrawn with what was being typed; a
+new evaluation redraws the prompt in place, so that the error it shows is the latest. When
 the run is over the prompt says so and leaves by itself: the reading thread is woken with
 SIGINT (rclpy's own signal handlers are not installed, so Ctrl-C is a plain
 KeyboardInterrupt). A pipe works the same way as a terminal (tests), without readline: its
@@ -156,6 +157,7 @@ class HumanInputNode(Node):
         latest = self.state.evaluation
         if latest is None or msg.movement_index >= latest[0]:
             self.state.evaluation = (int(msg.movement_index), float(msg.mean_distance))
+            self.redraw()  # the prompt on screen showed the one before
 
     def _on_status(self, msg: RunStatus) -> None:
         state = self.state
@@ -214,6 +216,18 @@ class HumanInputNode(Node):
             self.say(f"\r\x1b[K{text}\n{prompt(self.state)}{typed}", end="")
         else:
             self.say(f"\n{text}")
+
+    def redraw(self) -> None:
+        """Draw the prompt again, with what is being typed, so that its numbers are the
+        latest: drawn once per line, it showed the evaluation of when it was drawn until the
+        person typed (the error stayed at the first one all run). Only on a terminal: a pipe
+        gets a prompt per line read."""
+        if not (self.at_prompt and self.interactive):
+            return
+        import readline
+
+        typed = readline.get_line_buffer()
+        self.say(f"\r\x1b[K{prompt(self.state)}{typed}", end="")
 
     def prompt_text(self) -> str:
         return prompt(self.state)

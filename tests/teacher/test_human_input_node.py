@@ -288,9 +288,10 @@ UP, LEFT, ENTER = "\x1b[A", "\x1b[D", "\r"
 
 def test_a_terminal_gets_line_editing_history_and_news_above_the_prompt(
         ros_processes, client, tmp_path, teaching_file):
-    """On a (pseudo-)terminal: readline's arrows and a history kept across sessions, and a
-    line from the graph printed above the prompt without losing what is being typed."""
-    from sgim_msgs.msg import RunStatus
+    """On a (pseudo-)terminal: readline's arrows and a history kept across sessions, a line
+    from the graph printed above the prompt without losing what is being typed, and the
+    prompt redrawn with a new evaluation's error."""
+    from sgim_msgs.msg import Evaluation, RunStatus
     from sgim_ros import qos
 
     history = tmp_path / "history"
@@ -326,6 +327,15 @@ def test_a_terminal_gets_line_editing_history_and_news_above_the_prompt(
         before = term.wait_for("progress: movement 5/10 (50 %)", start)
         term.wait_for(f"[movements 5/10 | error - | demos 0] {PROMPT}li", start + len(before))
         assert before.endswith("\r\x1b[K")  # the line being typed was cleared first
+        # A new evaluation redraws the prompt in place, typed text kept: its error is the
+        # latest, not the one of when the prompt was drawn (it stayed 0.523 all run).
+        evaluations = client.node.create_publisher(Evaluation, "/evaluations", qos.RECORDS)
+        assert client.spin_until(lambda: evaluations.get_subscription_count() > 0)
+        start = len(term.output())
+        evaluations.publish(Evaluation(movement_index=5, mean_distance=0.321, outcome_size=2,
+                                       goals=[0.0, 0.0], reached=[0.1, 0.1],
+                                       distances=[0.321]))
+        term.wait_for(f"\r\x1b[K[movements 5/10 | error 0.321 | demos 0] {PROMPT}li", start)
         reply = term.wait_for(PROMPT, term.type("st", end=ENTER))
         assert "4 of 4 teaching goals not reached" in reply
         start = term.type("quit", end=ENTER)
