@@ -17,11 +17,14 @@ import os
 import shutil
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 
 CHROMIUM_FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                   "--disable-background-networking", "--disable-component-update",
-                  "--disable-sync", "--disable-dev-shm-usage"]
+                  "--disable-sync", "--disable-dev-shm-usage",
+                  # a page on this machine's own address must not go to a proxy from the
+                  # environment (loopback is exempt by default, another address is not)
+                  "--no-proxy-server"]
 
 
 class NoChromium(RuntimeError):
@@ -38,8 +41,10 @@ def chromium_path() -> str:
 
 
 @contextlib.contextmanager
-def browser_page(viewport: tuple[int, int] = (1100, 940)) -> Iterator[object]:
-    """A Playwright page in a fresh headless Chromium profile, closed afterwards."""
+def browser_page(viewport: tuple[int, int] = (1100, 940),
+                 flags: Sequence[str] = ()) -> Iterator[object]:
+    """A Playwright page in a fresh headless Chromium profile, closed afterwards; ``flags``:
+    more Chromium switches (e.g. --host-resolver-rules)."""
     try:
         from playwright.sync_api import sync_playwright
     except ImportError:
@@ -49,7 +54,8 @@ def browser_page(viewport: tuple[int, int] = (1100, 940)) -> Iterator[object]:
     with tempfile.TemporaryDirectory(prefix="sgim-chromium-") as profile, \
             sync_playwright() as playwright:
         context = playwright.chromium.launch_persistent_context(
-            profile, executable_path=executable, headless=True, args=CHROMIUM_FLAGS,
+            profile, executable_path=executable, headless=True,
+            args=[*CHROMIUM_FLAGS, *flags],
             viewport={"width": viewport[0], "height": viewport[1]})
         try:
             page = context.pages[0] if context.pages else context.new_page()

@@ -8,15 +8,24 @@ and sends commands with POST /api/command.
 Safety, since a page on another site could otherwise talk to it from the teacher's browser:
 - it listens on 127.0.0.1 unless told otherwise; another interface needs an access token
   (``serve`` refuses without one), given as ``?token=`` in the page's address and sent by the
-  page as the ``X-Teacher-Token`` header;
+  page as the ``X-Teacher-Token`` header. The page's own files (/, /static/) are served
+  without it: they hold no data, and a browser fetches a stylesheet and a script by their
+  plain address, so requiring it there left the page unstyled and dead; every answer that
+  says something of the run (/api/, /lake.png, /cast.gif) needs it;
 - on loopback, every request's Host header must name this server (no DNS rebinding); on
   another interface the Host is whatever name the teacher's machine uses for this one, and
   the token (which a rebinding page cannot know) is what keeps strangers out;
 - commands need the ``X-Teacher: 1`` header and a JSON body, which a cross-site form cannot
   send and a cross-site script cannot send without a CORS preflight this server never grants.
 
+Robustness: whatever arrives (any bytes, headers, query or JSON body) gets an answer with a
+JSON body: a valid one, or {"ok": false, "message": ...} with a 4xx status, http.server's own
+refusals included (tests/teacher/test_web_server.py and test_web_fuzz.py try it). The listen
+backlog holds a crowd of clients connecting at once (REQUEST_QUEUE), and a client that stops
+sending is dropped after CLIENT_TIMEOUT seconds instead of holding its thread.
+
 Routes: GET / (the page), /static/<file>, /api/state, /api/legend, /lake.png, /cast.gif;
-POST /api/command.
+POST /api/command. HEAD as GET.
 """
 
 from __future__ import annotations
@@ -27,7 +36,9 @@ import ipaddress
 import json
 import logging
 import socket
+import sys
 import threading
+from collections.abc import Callable
 from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
@@ -35,11 +46,15 @@ from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
 STATIC = Path(__file__).resolve().parent / "static"
+STATIC_FILES = frozenset(p.name for p in STATIC.iterdir() if p.is_file())  # all it serves
 CONTENT_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
                  ".css": "text/css; charset=utf-8", ".png": "image/png", ".gif": "image/gif"}
 MAX_BODY = 64 * 1024
 MIN_TOKEN = 16
 WILDCARDS = ("0.0.0.0", "::")  # listen on every interface
+REQUEST_QUEUE = 128  # the listen backlog: 5 (the default) reset a crowd of 20 clients
+CLIENT_TIMEOUT = 30.0  # seconds a connection may stay silent
+MESSAGE_LIMIT = 300  # characters of a refusal's message (it may quote what was sent)
 
 log = logging.getLogger(__name__)
 
@@ -77,6 +92,7 @@ def is_loopback(host: str) -> bool:
 class TeacherServer(ThreadingHTTPServer):
     daemon_threads = True  # a page left open must not keep the node from ending
     allow_reuse_address = True
+    request_queue_size = REQUEST_QUEUE
 
     def __init__(self, host: str, port: int, token: str, api: Api) -> None:
         if not is_loopback(host) and len(token) < MIN_TOKEN:
@@ -114,28 +130,67 @@ class TeacherServer(ThreadingHTTPServer):
         if self._thread is not None:
             self._thread.join(timeout=5)
 
+    def handle_error(self, request: Any, client_address: Any) -> None:
+        """A connection that failed outside a request's handling (the client went away):
+        one line, not socketserver's traceback on stderr."""
+        error = sys.exc_info()[1]
+        if isinstance(error, OSError):
+            log.debug("connection from %s ended: %r", client_address, error)
+        else:
+            log.error("connection from %s failed: %r", client_address, error)
+
+
+def clipped(text: str, limit: int = MESSAGE_LIMIT) -> str:
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
 
 class Handler(BaseHTTPRequestHandler):
     server: TeacherServer
     protocol_version = "HTTP/1.1"
+    # A request line too broken to name its version is answered as HTTP/1.0 (a status line
+    # and headers), never as HTTP/0.9's bare body, which no client can tell from garbage.
+    default_request_version = "HTTP/1.0"
     server_version = "sgim-web-teacher"
+    timeout = CLIENT_TIMEOUT
 
     def log_message(self, format: str, *args: Any) -> None:
         log.debug(format, *args)
 
+    def send_error(self, code: int, message: str | None = None,
+                   explain: str | None = None) -> None:
+        """http.server's own refusals (a bad request line, too long a header, an unknown
+        method) in JSON like every other answer, not its HTML page."""
+        if self.request_version == "HTTP/0.9":
+            self.request_version = "HTTP/1.0"
+        self.close_connection = True
+        short = self.responses.get(code, ("error", ""))[0]
+        self.log_error("code %d, message %s", code, message or short)
+        self._send_json({"ok": False, "message": clipped(message or short)}, code,
+                        close=True)
+
     # --- checks ---------------------------------------------------------------------------
 
-    def _allowed(self) -> bool:
+    def _target(self) -> tuple[str, dict[str, list[str]]] | None:
+        """The request's path and query; None (answered) when they cannot be read."""
+        try:
+            parts = urlsplit(self.path)
+            return parts.path, parse_qs(parts.query)
+        except ValueError as error:
+            self._send_json({"ok": False, "message": clipped(f"unreadable address: {error}")},
+                            HTTPStatus.BAD_REQUEST)
+            return None
+
+    def _allowed(self, query: dict[str, list[str]], needs_token: bool = True) -> bool:
         host = (self.headers.get("Host") or "").lower()
         if self.server.check_host and host not in self.server.allowed_hosts:
-            self._send_json({"ok": False, "message": f"unknown host {host!r}"},
+            self._send_json({"ok": False, "message": clipped(f"unknown host {host!r}")},
                             HTTPStatus.FORBIDDEN)
             return False
         token = self.server.token
-        if token:
+        if token and needs_token:
             given = self.headers.get("X-Teacher-Token") or ""
             if not given:
-                given = parse_qs(urlsplit(self.path).query).get("token", [""])[0]
+                given = query.get("token", [""])[0]
             if not hmac.compare_digest(given.encode(), token.encode()):
                 self._send_json({"ok": False, "message": "a valid access token is needed "
                                  "(open the address the node printed, with its ?token=)"},
@@ -145,8 +200,10 @@ class Handler(BaseHTTPRequestHandler):
 
     # --- answers ----------------------------------------------------------------------------
 
-    def _send(self, status: int, body: bytes, content_type: str) -> None:
+    def _send(self, status: int, body: bytes, content_type: str, close: bool = False) -> None:
         self.send_response(status)
+        if close:
+            self.send_header("Connection", "close")
         self.send_header("Content-Type", content_type)
         self.send_header("Content-Length", str(len(body)))
         self.send_header("Cache-Control", "no-store")
@@ -156,36 +213,61 @@ class Handler(BaseHTTPRequestHandler):
         if self.command != "HEAD":
             self.wfile.write(body)
 
-    def _send_json(self, value: Any, status: int = HTTPStatus.OK) -> None:
+    def _send_json(self, value: Any, status: int = HTTPStatus.OK, close: bool = False) -> None:
         self._send(status, json.dumps(value, separators=(",", ":"), allow_nan=False).encode(),
-                   "application/json")
+                   "application/json", close)
+
+    def _guarded(self, handle: Callable[[], None]) -> None:
+        """Run one request's handling; a client gone is routine, anything else a bug that
+        still gets an answer (and one line in the log, which the fuzz test forbids)."""
+        try:
+            handle()
+        except (BrokenPipeError, ConnectionResetError, TimeoutError):
+            self.close_connection = True
+        except Exception as error:
+            self.close_connection = True
+            log.error("the web teacher failed on %s %s: %r", self.command,
+                      clipped(self.path, 200), error)
+            with contextlib.suppress(OSError):
+                self._send_json({"ok": False, "message": "the web teacher failed on this "
+                                 "request (its log says why)"},
+                                HTTPStatus.INTERNAL_SERVER_ERROR, close=True)
 
     def do_GET(self) -> None:
-        if not self._allowed():
-            return
-        path = urlsplit(self.path).path
-        try:
-            if path in ("/", "/index.html"):
-                self._static("index.html")
-            elif path.startswith("/static/"):
-                self._static(path[len("/static/"):])
-            elif path == "/api/state":
-                self._send_json(self.server.api.state(self._cursors()))
-            elif path == "/api/legend":
-                self._send_json(self.server.api.legend())
-            elif path in ("/lake.png", "/cast.gif"):
-                data = self.server.api.image(path[1:])
-                if data is None:
-                    self._send_json({"ok": False, "message": "nothing yet"}, HTTPStatus.NOT_FOUND)
-                else:
-                    self._send(HTTPStatus.OK, data, CONTENT_TYPES[Path(path).suffix])
-            else:
-                self._send_json({"ok": False, "message": f"no page {path}"},
-                                HTTPStatus.NOT_FOUND)
-        except (BrokenPipeError, ConnectionResetError):
-            pass
+        self._guarded(self._get)
+
+    def do_HEAD(self) -> None:
+        self._guarded(self._get)
 
     def do_POST(self) -> None:
+        self._guarded(self._post)
+
+    def _get(self) -> None:
+        target = self._target()
+        if target is None:
+            return
+        path, query = target
+        static = "index.html" if path in ("/", "/index.html") else (
+            path[len("/static/"):] if path.startswith("/static/") else None)
+        if not self._allowed(query, needs_token=static is None):
+            return
+        if static is not None:
+            self._static(static)
+        elif path == "/api/state":
+            self._send_json(self.server.api.state(self._cursors(query)))
+        elif path == "/api/legend":
+            self._send_json(self.server.api.legend())
+        elif path in ("/lake.png", "/cast.gif"):
+            data = self.server.api.image(path[1:])
+            if data is None:
+                self._send_json({"ok": False, "message": "nothing yet"}, HTTPStatus.NOT_FOUND)
+            else:
+                self._send(HTTPStatus.OK, data, CONTENT_TYPES[Path(path).suffix])
+        else:
+            self._send_json({"ok": False, "message": clipped(f"no page {path}")},
+                            HTTPStatus.NOT_FOUND)
+
+    def _post(self) -> None:
         # Read the body first, whatever the answer: on a kept-alive connection, unread bytes
         # would be taken for the next request (a refused command broke the page's next one).
         try:
@@ -193,14 +275,15 @@ class Handler(BaseHTTPRequestHandler):
         except ValueError:
             length = -1
         if not 0 < length <= MAX_BODY:
+            self._send_json({"ok": False, "message": f"a command is 1 to {MAX_BODY} bytes "
+                             "with its Content-Length"}, HTTPStatus.BAD_REQUEST, close=True)
             self.close_connection = True
-            self._send_json({"ok": False, "message": f"a command is 1 to {MAX_BODY} bytes"},
-                            HTTPStatus.BAD_REQUEST)
             return
         raw = self.rfile.read(length)
-        if not self._allowed():
+        target = self._target()
+        if target is None or not self._allowed(target[1]):
             return
-        if urlsplit(self.path).path != "/api/command":
+        if target[0] != "/api/command":
             self._send_json({"ok": False, "message": "commands go to /api/command"},
                             HTTPStatus.NOT_FOUND)
             return
@@ -210,29 +293,30 @@ class Handler(BaseHTTPRequestHandler):
             return
         try:
             body = json.loads(raw)
-        except (json.JSONDecodeError, UnicodeDecodeError) as error:
-            self._send_json({"ok": False, "message": f"the command is not JSON: {error}"},
+        except (ValueError, RecursionError) as error:  # JSON, UTF-8, too long a number
+            self._send_json({"ok": False, "message": clipped(f"the command is not JSON: "
+                                                             f"{error}")},
                             HTTPStatus.BAD_REQUEST)
             return
-        with contextlib.suppress(BrokenPipeError, ConnectionResetError):
-            self._send_json(self.server.api.command(body))
+        self._send_json(self.server.api.command(body))
 
-    def _cursors(self) -> dict[str, int]:
-        query = parse_qs(urlsplit(self.path).query)
+    @staticmethod
+    def _cursors(query: dict[str, list[str]]) -> dict[str, int]:
         cursors = {}
         for name in ("landings", "evaluations", "regions", "teaching", "log"):
             try:
                 cursors[name] = int(query.get(name, ["-1"])[0])
-            except ValueError:
+            except ValueError:  # not a number, or one of more than 4300 digits
                 cursors[name] = -1
         return cursors
 
     def _static(self, name: str) -> None:
-        file = (STATIC / name).resolve()
-        if STATIC not in file.parents or not file.is_file() or file.suffix not in CONTENT_TYPES:
-            self._send_json({"ok": False, "message": f"no file {name}"}, HTTPStatus.NOT_FOUND)
+        """One of the page's own files, by its exact name: no path is ever resolved."""
+        if name not in STATIC_FILES or Path(name).suffix not in CONTENT_TYPES:
+            self._send_json({"ok": False, "message": clipped(f"no file {name}")},
+                            HTTPStatus.NOT_FOUND)
             return
-        self._send(HTTPStatus.OK, file.read_bytes(), CONTENT_TYPES[file.suffix])
+        self._send(HTTPStatus.OK, (STATIC / name).read_bytes(), CONTENT_TYPES[Path(name).suffix])
 
 
 def serve(host: str, port: int, token: str, api: Api) -> TeacherServer:
