@@ -14,13 +14,18 @@ the node (a 50 Hz timer takes the queue) and answers each queued command when it
 The cast of the latest demonstration is drawn by `render_cast` in a low-priority child
 process, so the run is not slowed.
 
+After the run: with `linger` > 0 and a page open (it asked for the state in the last 90 s),
+the page keeps being served, saying the run is over, until the person closes it there or
+`linger` seconds pass. The launcher waits for that (graph/experiment.py), by two files beside
+`address_file`: the address file is removed once the node heard the end of the run (at once
+when it does not linger), and `web_teacher.linger` exists while it lingers.
+
 Interfaces:
   topics    movements, region_map, goals, evaluations, demonstrations, run_status,
             pace_state (subscribed); demonstrations (published, source "web")
   clients   execute_action (measures a pasted action, record=false), pace (the arbiter's)
 Parameters: host, port, token, address_file, tolerance_noise, outcome_noise, teaching_set,
-execute_timeout,
-render_casts (see PARAMS).
+execute_timeout, render_casts, linger (see PARAMS).
 """
 
 from __future__ import annotations
@@ -50,7 +55,7 @@ from sgim_nodes.nodes.picture_feed import REACH_PARAMS, follow, reach_tolerance
 from sgim_nodes.view.picture import LivePicture
 from sgim_ros import qos
 from sgim_ros.entry import run_node
-from sgim_ros.params import Param, ParameterError, declare, positive
+from sgim_ros.params import Param, ParameterError, declare, non_negative, positive
 from sgim_ros.ready import serve_ready
 from sim_bridge import scaling
 from sim_bridge.data_files import load_teaching_set
@@ -63,7 +68,7 @@ from teacher.human_decisions import (
     TeachingLibrary,
     executed_demonstration,
 )
-from teacher.web.app import WebTeacher
+from teacher.web.app import LAND_RGB, WATER_RGB, WebTeacher
 from teacher.web.server import Api, Refused, serve
 
 PARAMS = (
@@ -81,6 +86,10 @@ PARAMS = (
           "action", positive, "> 0"),
     Param("render_casts", True, "draw the latest demonstration's cast as a GIF for the page "
           "(a low-priority child process)"),
+    # Not read-only: how long a finished run's page stays does not shape the run (and is
+    # kept out of its fingerprint); it is read when the run ends.
+    Param("linger", 0.0, "seconds the page stays after the run while someone looks at it, "
+          "unless closed there; 0: it ends with the run", non_negative, read_only=False),
 )
 PACE_COMMANDS = {"pause": Pace.Request.PAUSE, "resume": Pace.Request.RESUME,
                  "step": Pace.Request.STEP}
@@ -100,6 +109,7 @@ class WebTeacherNode(Node, Api):
             raise ParameterError(f"parameter 'teaching_set': cannot use {where}: {error}") \
                 from None
         self.execute_timeout = p["execute_timeout"]
+        self.p = p
         self.app = WebTeacher(library, LivePicture(library.teacher),
                               LearnerState(library.action_size))
         self._queue: queue.Queue[tuple[Any, ThreadFuture]] = queue.Queue()
@@ -128,8 +138,12 @@ class WebTeacherNode(Node, Api):
             raise ParameterError(str(error)) from None
         self.url = self.server.url
         self.create_timer(0.02, self.work)  # queued commands, pending calls, the cast
-        if p["address_file"]:
-            Path(p["address_file"]).write_text(self.url + "\n")
+        self.address_file = Path(p["address_file"]) if p["address_file"] else None
+        self.linger_file = (self.address_file.with_suffix(".linger")
+                            if self.address_file is not None else None)
+        self._lingering = False
+        if self.address_file is not None:
+            self.address_file.write_text(self.url + "\n")
         self.get_logger().info(f"teach at {self.url}")
         self.app.say(f"{len(library.actions)} teaching goals from {where}; reach tolerance "
                      f"{reach_tolerance(p):g}")
@@ -142,6 +156,7 @@ class WebTeacherNode(Node, Api):
         with self.app.lock:
             problem = self.app.learner.add_movement(
                 msg.index, msg.status == Movement.STATUS_OK, msg.action, msg.outcome)
+            self.app.movement_seen(int(msg.index), int(msg.process))
         if problem:
             self.get_logger().warning(problem)
 
@@ -157,6 +172,28 @@ class WebTeacherNode(Node, Api):
             level = ("warning" if " refused: " in msg.message
                      or msg.state == RunStatus.STATE_ABORTED else "info")
             self.app.say(f"run: {msg.message}", level)
+        if msg.state in (RunStatus.STATE_FINISHED, RunStatus.STATE_ABORTED):
+            self._run_ended()
+
+    def _run_ended(self) -> None:
+        """Linger or not (see the module's docstring), and tell the launcher which."""
+        if self.app.linger.decided:
+            return
+        self._lingering = self.app.run_ended(self.p["linger"])
+        if self._lingering:
+            self.get_logger().info(f"the run is over: the page stays at {self.url} for at "
+                                   f"most {self.p['linger']:g} s, or until closed there")
+            if self.linger_file is not None:
+                self.linger_file.write_text(self.url + "\n")
+        if self.address_file is not None:
+            self.address_file.unlink(missing_ok=True)
+
+    def _stop_lingering(self) -> None:
+        self._lingering = False
+        self.app.say("this page is closing: the web teacher stops", "turn")
+        self.get_logger().info("the page was closed, or its time after the run ran out")
+        if self.linger_file is not None:
+            self.linger_file.unlink(missing_ok=True)
 
     def _on_pace(self, msg: PaceState) -> None:
         with self.app.lock:
@@ -189,14 +226,10 @@ class WebTeacherNode(Node, Api):
         return self._lake if name == "lake.png" else self._cast_bytes
 
     def command(self, body: Any) -> dict[str, Any]:
-        try:
-            decision = self.app.decide(body)
-        except CommandError as error:
-            self.app.say(f"refused: {error}", "error")
-            return {"ok": False, "message": str(error)}
-        if isinstance(decision, dict):
-            self.app.say(decision["message"])
-            return decision
+        return self.app.command(body, self._carry_out)
+
+    def _carry_out(self, decision: Any) -> dict[str, Any]:
+        """Hand a decision to the main thread (which owns ROS) and wait for its answer."""
         done: ThreadFuture = ThreadFuture()
         self._queue.put((decision, done))
         wait = COMMAND_WAIT + SERVICE_WAIT + (
@@ -227,6 +260,8 @@ class WebTeacherNode(Node, Api):
                 self._pending.remove(item)
                 self._finish(future, decision, done)
         self._poll_render()
+        if self._lingering and self.app.linger_ended():
+            self._stop_lingering()
 
     def _ready(self, decision: Any) -> bool:
         """Whether the service the decision needs is matched (discovery takes a moment)."""
@@ -295,6 +330,7 @@ class WebTeacherNode(Node, Api):
                                    "running?): nothing sent")
             learner.demonstrations += 1
             number, at = learner.demonstrations, learner.movement_count
+            self.app.demonstration_sent(number, at)
         self._demos.publish(Demonstration(
             stamp=self.get_clock().now().to_msg(), index=number, movement_index=at,
             action=[float(v) for v in demo.action], outcome=[float(v) for v in demo.outcome],
@@ -302,7 +338,7 @@ class WebTeacherNode(Node, Api):
         text = f"sent demonstration {number} at movement {at}: {demo.text}"
         self.app.say(text, "sent")
         self._queue_render(demo.action, f"demonstration {number}: {demo.text}")
-        return {"ok": True, "message": text, "demonstration": number}
+        return {"ok": True, "message": text, "demonstration": number, "movement": at}
 
     # --- the cast picture ---------------------------------------------------------------------
 
@@ -343,6 +379,9 @@ class WebTeacherNode(Node, Api):
 
     def destroy_node(self) -> None:
         self.server.stop()
+        for file in (self.address_file, self.linger_file):  # it serves no more
+            if file is not None:
+                file.unlink(missing_ok=True)
         if self._render is not None and self._render[0].poll() is None:
             self._render[0].kill()
             self._render[0].wait(timeout=5)
@@ -360,8 +399,8 @@ def lake_png(size: int = 240) -> bytes:
     u = (np.arange(size) + 0.5) / size * 2.0 - 1.0
     ux, uy = np.meshgrid(u, -u)  # row 0 is y = +1
     water = is_water(scaling.outcome_to_world(np.column_stack([ux.ravel(), uy.ravel()])))
-    rgb = np.where(water.reshape(size, size, 1), np.array([214, 234, 248], np.uint8),
-                   np.array([238, 232, 214], np.uint8)).astype(np.uint8)
+    rgb = np.where(water.reshape(size, size, 1), np.array(WATER_RGB, np.uint8),
+                   np.array(LAND_RGB, np.uint8)).astype(np.uint8)
     buffer = io.BytesIO()
     Image.fromarray(rgb, "RGB").save(buffer, format="PNG", optimize=True)
     return buffer.getvalue()

@@ -3,12 +3,21 @@
 // region tree onto the base canvas when its version moves, goals on a small overlay when a
 // goal moved; texts are written only when they change (each write costs the browser a layout).
 // window.teacherStats says how long each update took (benchmarks/bench_web_teacher.py).
+//
+// One command at a time: every command button is disabled until the answer comes, and each
+// demonstration request carries a new idempotency key, so a double click or a retry cannot
+// demonstrate twice. The legend lists exactly the marks on the picture (teacherPage.drawn).
 "use strict";
 (() => {
   const POLL_MS = 300;  // about 3 updates a second (each waits for the previous answer)
+  const PICK_PX = 10;  // a click this near a teaching goal picks it
+  const SHADE_ALPHA = 0.22;  // interest over the lake: land and water stay apart under it
   const token = new URLSearchParams(location.search).get("token") || "";
   const auth = token ? { "X-Teacher-Token": token } : {};
   const withToken = (url) => (token ? `${url}${url.includes("?") ? "&" : "?"}token=${encodeURIComponent(token)}` : url);
+  // crypto.randomUUID needs a secure context, which http:// on another machine is not.
+  const newKey = () => Array.from(crypto.getRandomValues(new Uint8Array(16)),
+                                  (b) => b.toString(16).padStart(2, "0")).join("");
   const $ = (id) => document.getElementById(id);
   const W = $("base").width, H = $("base").height;
   const base = $("base").getContext("2d");
@@ -17,11 +26,17 @@
   const errorCanvas = $("errors").getContext("2d");
 
   const cursor = { landings: 0, evaluations: 0, regions: -1, teaching: -1, log: 0 };
-  const view = { legend: null, lake: null, regions: null, teaching: null, goal: null,
-                 evaluations: [], count: 0, total: 0, offer: null, castVersion: 0, over: false };
+  const view = { legend: null, lake: null, shore: null, surface: null, regions: null,
+                 teaching: null, goal: null, demonstrations: [], evaluations: [], count: 0,
+                 total: 0, offer: null, castVersion: 0, over: false, runState: "waiting",
+                 linger: { left: null, closed: false }, paceKnown: false, busy: false,
+                 gone: false };
   const stats = { updates: 0, totalMs: 0, maxMs: 0, lastMs: 0, slow: 0, landings: 0,
                   failures: 0, started: performance.now() };
   window.teacherStats = stats;
+  // What is on the picture now, by legend entry: the legend shows these and only these.
+  const drawn = { processes: new Set(), base: new Set(), overlay: new Set() };
+  let legendKey = "";
 
   const shown = new Map();  // element id -> text on screen
   const setText = (id, text) => {
@@ -34,6 +49,7 @@
   const px = (x) => ((x + 1) / 2) * W;
   const py = (y) => ((1 - y) / 2) * H;
   const rgb = (c, a = 1) => `rgba(${c[0]},${c[1]},${c[2]},${a})`;
+  const mark = (name) => view.legend.marks[name];
 
   function interestColour(f) {
     const stops = view.legend.interest;
@@ -48,16 +64,44 @@
     return stops[stops.length - 1][1];
   }
 
+  // --- the lake: its land and water, and the shore drawn over the shading ----------------
+
+  function readLake(image) {
+    const c = document.createElement("canvas");
+    c.width = image.width; c.height = image.height;
+    const g = c.getContext("2d");
+    g.drawImage(image, 0, 0);
+    const pixels = g.getImageData(0, 0, c.width, c.height);
+    const w = c.width, h = c.height, wet = new Uint8Array(w * h);
+    for (let i = 0; i < w * h; i++) wet[i] = pixels.data[4 * i + 2] > pixels.data[4 * i] ? 1 : 0;
+    const shore = g.createImageData(w, h);
+    for (let y = 0; y < h; y++) {
+      for (let x = 0; x < w; x++) {
+        const i = y * w + x;
+        if ((x + 1 < w && wet[i] !== wet[i + 1]) || (y + 1 < h && wet[i] !== wet[i + w])) {
+          shore.data.set([...mark("shore"), 255], 4 * i);
+        }
+      }
+    }
+    g.putImageData(shore, 0, 0);
+    view.surface = { wet, w, h };
+    return c;
+  }
+
   // --- drawing -------------------------------------------------------------------------
 
   function drawBase() {
     base.clearRect(0, 0, W, H);
-    if (view.lake) base.drawImage(view.lake, 0, 0, W, H);
+    drawn.base.clear();
+    if (view.lake) {
+      base.drawImage(view.lake, 0, 0, W, H);
+      drawn.base.add("water").add("land");
+    }
     const regions = view.regions;
     if (regions && regions.rects.length) {
       for (const [x0, y0, x1, y1, interest] of regions.rects) {
         const f = regions.top > 0 ? interest / regions.top : 0;
-        base.fillStyle = rgb(interestColour(f), 0.28);
+        base.fillStyle = rgb(interestColour(f), SHADE_ALPHA);
         base.fillRect(px(x0), py(y1), px(x1) - px(x0), py(y0) - py(y1));
       }
       base.strokeStyle = "rgba(60,60,60,0.45)";
@@ -65,22 +109,33 @@
       for (const [x0, y0, x1, y1] of regions.rects) {
         base.strokeRect(px(x0) + 0.5, py(y1) + 0.5, px(x1) - px(x0), py(y0) - py(y1));
       }
+      drawn.base.add("interest");
+    }
+    if (view.shore) {  // over the shading: the coast stays sharp whatever the interest
+      base.imageSmoothingEnabled = false;
+      base.drawImage(view.shore, 0, 0, W, H);
+      base.imageSmoothingEnabled = true;
+      drawn.base.add("shore");
     }
     base.strokeStyle = "rgba(0,0,0,0.15)";
     base.beginPath();
     base.moveTo(W / 2, 0); base.lineTo(W / 2, H); base.moveTo(0, H / 2); base.lineTo(W, H / 2);
     base.stroke();
+    drawLegend();
   }
 
   function drawLandings(batch) {
     if (batch.from === 0 && stats.landings > 0) {
       land.clearRect(0, 0, W, H);  // the node restarted: start again
       stats.landings = 0;
+      drawn.processes.clear();
     }
     const procs = view.legend.processes;
     let style = "";
     for (let i = 0; i < batch.x.length; i++) {
-      const colour = procs[batch.p[i]] ? procs[batch.p[i]].rgb : [120, 120, 120];
+      const code = String(batch.p[i]);
+      const colour = procs[code] ? procs[code].rgb : [120, 120, 120];
+      drawn.processes.add(procs[code] ? code : "other");
       const next = rgb(colour, 0.85);
       if (next !== style) { land.fillStyle = next; style = next; }
       land.fillRect(px(batch.x[i]) - 1.5, py(batch.y[i]) - 1.5, 3, 3);
@@ -89,10 +144,13 @@
   }
 
   function drawOverlay(force = false) {
-    const key = JSON.stringify([view.goal, cursor.teaching, view.offer && view.offer.id]);
+    const demos = view.demonstrations;
+    const key = JSON.stringify([view.goal, cursor.teaching, view.offer && view.offer.id,
+                                demos.length && demos[demos.length - 1].index]);
     if (key === overlayKey && !force) return;  // nothing on it moved
     overlayKey = key;
     over.clearRect(0, 0, W, H);
+    drawn.overlay.clear();
     const t = view.teaching;
     if (t) {
       over.font = "11px sans-serif";
@@ -100,32 +158,46 @@
         over.beginPath();
         over.arc(px(x), py(y), 6, 0, 2 * Math.PI);
         if (t.reached[i]) {  // a ring: reached goals must not hide the landings near them
-          over.lineWidth = 2.5; over.strokeStyle = "rgba(20,150,40,0.95)"; over.stroke();
+          over.lineWidth = 2.5; over.strokeStyle = rgb(mark("reached"), 0.95); over.stroke();
+          drawn.overlay.add("reached");
         } else {
-          over.fillStyle = "rgba(230,40,40,0.9)"; over.fill();
+          over.fillStyle = rgb(mark("unreached"), 0.9); over.fill();
           over.lineWidth = 1.5; over.strokeStyle = "#fff"; over.stroke();
+          drawn.overlay.add("unreached");
         }
         over.fillStyle = "#111";
         over.fillText(String(i), px(x) + 8, py(y) - 6);
       });
     }
+    for (const d of demos) {  // what the teacher showed: a diamond at its outcome
+      if (!d.outcome || d.outcome.length !== 2) continue;
+      const [x, y] = [px(d.outcome[0]), py(d.outcome[1])];
+      over.beginPath();
+      over.moveTo(x, y - 7); over.lineTo(x + 7, y); over.lineTo(x, y + 7); over.lineTo(x - 7, y);
+      over.closePath();
+      over.lineWidth = 2; over.strokeStyle = rgb(mark("demonstration")); over.stroke();
+      drawn.overlay.add("demonstration");
+    }
     if (view.goal) {
       const [x, y] = view.goal;
       over.beginPath();
       over.arc(px(x), py(y), 8, 0, 2 * Math.PI);
-      over.lineWidth = 3; over.strokeStyle = "#000"; over.stroke();
+      over.lineWidth = 3; over.strokeStyle = rgb(mark("goal")); over.stroke();
       over.lineWidth = 1.5; over.strokeStyle = "#fff"; over.stroke();
+      drawn.overlay.add("goal");
     }
     if (view.offer) {
       const [gx, gy] = view.offer.goal, [ox, oy] = view.offer.outcome;
       over.setLineDash([4, 3]);
-      over.strokeStyle = "#6a1b9a"; over.lineWidth = 1.5;
+      over.strokeStyle = rgb(mark("offer")); over.lineWidth = 1.5;
       over.beginPath(); over.moveTo(px(gx), py(gy)); over.lineTo(px(ox), py(oy)); over.stroke();
       over.setLineDash([]);
       over.beginPath(); over.arc(px(ox), py(oy), 9, 0, 2 * Math.PI); over.stroke();
       over.beginPath(); over.moveTo(px(gx) - 6, py(gy)); over.lineTo(px(gx) + 6, py(gy));
       over.moveTo(px(gx), py(gy) - 6); over.lineTo(px(gx), py(gy) + 6); over.stroke();
+      drawn.overlay.add("offer");
     }
+    drawLegend();
   }
 
   function drawErrors() {
@@ -152,33 +224,81 @@
     c.fillText(`${last[1].toFixed(3)} at ${last[0]}`, w - 110, 20);
   }
 
+  // --- the legend: one entry per kind of mark on the picture, no more ----------------------
+
+  function swatch(kind, colour) {
+    const s = document.createElement("span");
+    s.className = `swatch ${kind}`;
+    if (kind === "ring") s.style.borderColor = rgb(colour);
+    else if (kind === "diamond") s.style.borderColor = rgb(colour);
+    else if (kind === "dashed") s.style.borderColor = rgb(colour);
+    else s.style.background = rgb(colour);
+    return s;
+  }
+
+  function entry(id, colour, label, kind = "dot") {
+    const e = document.createElement("span");
+    e.className = "entry"; e.dataset.mark = id;
+    if (colour) { e.dataset.rgb = colour.join(","); e.append(swatch(kind, colour)); }
+    e.append(label);
+    return e;
+  }
+
+  function legendMarks() {
+    const marks = [...[...drawn.processes].sort().map((c) => `landing-${c}`), ...drawn.base,
+                   ...drawn.overlay];
+    return [...new Set(marks)];
+  }
+
   function drawLegend() {
+    if (!view.legend) return;
+    const marks = legendMarks();
+    const key = marks.join(" ");
+    if (key === legendKey) return;
+    legendKey = key;
     const box = $("legend");
     box.textContent = "";
-    for (const code of Object.keys(view.legend.processes)) {
-      const { name, rgb: colour } = view.legend.processes[code];
-      const dot = document.createElement("span");
-      dot.className = "dot"; dot.style.background = rgb(colour);
-      box.append(dot, name);
+    const procs = view.legend.processes;
+    const landings = marks.filter((m) => m.startsWith("landing-"));
+    if (landings.length) {
+      const group = document.createElement("span"); group.className = "group";
+      group.append("landings:");
+      for (const m of landings) {
+        const code = m.slice("landing-".length);
+        group.append(procs[code] ? entry(m, procs[code].rgb, procs[code].name)
+                                 : entry(m, [120, 120, 120], "other"));
+      }
+      box.append(group);
     }
-    const bar = document.createElement("canvas");
-    bar.width = 80; bar.height = 10;
-    const g = bar.getContext("2d");
-    for (let i = 0; i < 80; i++) { g.fillStyle = rgb(interestColour(i / 79)); g.fillRect(i, 0, 1, 10); }
-    const label = document.createElement("span");
-    label.style.marginLeft = "12px";
-    label.textContent = "interest: low";
-    box.append(label, bar, "high · teaching goal: ");
-    const red = document.createElement("span"); red.className = "dot"; red.style.background = "rgb(230,40,40)";
-    const green = document.createElement("span"); green.className = "dot";
-    green.style.border = "2px solid rgb(20,150,40)"; green.style.width = green.style.height = "7px";
-    box.append(red, "unreached", green, "reached");
+    const other = document.createElement("span"); other.className = "group";
+    const lake = view.legend.lake;
+    if (marks.includes("water")) other.append(entry("water", lake.water, "water", "square"));
+    if (marks.includes("land")) other.append(entry("land", lake.land, "land", "square"));
+    if (marks.includes("shore")) other.append(entry("shore", mark("shore"), "shore", "line"));
+    if (marks.includes("interest")) {
+      const e = entry("interest", null, "interest regions: low ");
+      const bar = document.createElement("canvas");
+      bar.width = 80; bar.height = 10;
+      const g = bar.getContext("2d");
+      for (let i = 0; i < 80; i++) { g.fillStyle = rgb(interestColour(i / 79)); g.fillRect(i, 0, 1, 10); }
+      e.append(bar, " high");
+      other.append(e);
+    }
+    if (other.childNodes.length) box.append(other);
+    const goals = document.createElement("span"); goals.className = "group";
+    if (marks.includes("unreached")) goals.append(entry("unreached", mark("unreached"), "teaching goal, unreached"));
+    if (marks.includes("reached")) goals.append(entry("reached", mark("reached"), "teaching goal, reached", "ring"));
+    if (marks.includes("demonstration")) goals.append(entry("demonstration", mark("demonstration"), "demonstrated outcome", "diamond"));
+    if (marks.includes("goal")) goals.append(entry("goal", mark("goal"), "learner's current goal", "ring"));
+    if (marks.includes("offer")) goals.append(entry("offer", mark("offer"), "offer: goal to outcome", "dashed"));
+    if (goals.childNodes.length) box.append(goals);
   }
 
   // --- the state ---------------------------------------------------------------------------
 
   function apply(s) {
     view.count = s.count; view.total = s.total; view.goal = s.goal;
+    view.demonstrations = s.demonstrations || [];
     setText("learner", s.learner || "-");
     setText("count", s.count);
     setText("total", s.total || "?");
@@ -209,6 +329,7 @@
       cursor.log = number;
     }
     if (s.log.length) while ($("log").children.length > 200) $("log").lastChild.remove();
+    view.linger = s.linger || { left: null, closed: false };
     showRun(s.run, s.pace);
     if (s.cast.version > view.castVersion) {
       view.castVersion = s.cast.version;
@@ -221,10 +342,41 @@
     drawOverlay();
   }
 
+  function refreshButtons() {
+    const pace = view.busy || view.over || !view.paceKnown;
+    for (const id of ["pause", "resume", "step"]) if ($(id).disabled !== pace) $(id).disabled = pace;
+    const demonstrate = view.busy || view.over;
+    for (const b of document.querySelectorAll("button.demonstrate")) {
+      if (b.disabled !== demonstrate) b.disabled = demonstrate;
+    }
+    const close = view.busy || view.gone || view.linger.closed;
+    if ($("close").disabled !== close) $("close").disabled = close;
+    $("space").classList.toggle("busy", view.busy);
+  }
+
+  function showOver() {
+    if (!view.over) { $("over").classList.add("hidden"); return; }
+    $("over").classList.remove("hidden");
+    const left = view.linger.left;
+    let text;
+    if (view.gone || view.linger.closed) {
+      text = "The web teacher has stopped: this page shows the run as it ended.";
+    } else if (left !== null) {
+      text = `This page keeps showing it for ${Math.ceil(left)} s more, or until you close it.`;
+    } else {
+      text = "The web teacher stops with the run: this page keeps what it shows.";
+    }
+    setText("over-title", `The run is over (${view.runState} at movement ${view.count}).`);
+    setText("over-text", text);
+    $("close").classList.toggle("hidden", left === null || view.gone || view.linger.closed);
+  }
+
   function showRun(run, pace) {
     view.over = run.state === "finished" || run.state === "aborted";
     view.runState = run.state;
-    setText("run-state", run.state === "waiting" ? "waiting for the run" : run.state);
+    view.paceKnown = pace.known;
+    setText("run-state", run.state === "waiting" ? "waiting for the run"
+                         : view.over ? `${run.state}: the run is over` : run.state);
     setClass("run-state", `badge${view.over ? " over" : ""}`);
     let text = "", kind = "";
     if (pace.waiting) {
@@ -237,8 +389,8 @@
     }
     setText("pace-state", text);
     setClass("pace-state", `badge ${kind}${text && !view.over ? "" : " hidden"}`);
-    const disabled = view.over || !pace.known;
-    for (const id of ["pause", "resume", "step"]) if ($(id).disabled !== disabled) $(id).disabled = disabled;
+    showOver();
+    refreshButtons();
   }
 
   async function poll() {
@@ -256,10 +408,15 @@
       setTimeout(poll, POLL_MS);
     } catch (error) {
       stats.failures += 1;  // the badge says it; the message line keeps the last command's answer
-      setText("run-state", view.over ? `${view.runState}: the web teacher has stopped`
-                                     : `the web teacher does not answer (${error.message})`);
+      if (view.over) {
+        view.gone = true;
+        setText("run-state", `${view.runState}: the web teacher has stopped`);
+        showOver(); refreshButtons();
+      } else {
+        setText("run-state", `the web teacher does not answer (${error.message})`);
+      }
       setClass("run-state", "badge over");
-      setTimeout(poll, 1000);
+      setTimeout(poll, view.over ? 5000 : 1000);
     }
   }
 
@@ -271,11 +428,14 @@
     m.className = ok ? "ok" : "error";
   }
 
+  // One command at a time; the buttons stay disabled until its answer comes.
   async function command(body) {
-    if (view.over) {  // the node may be gone already: say it here
+    if (view.busy) return { ok: false, busy: true };
+    if (view.over && body.command !== "close") {  // the node may be gone already: say it here
       say(`the run is over (${view.runState}): the learner takes no more demonstrations`, false);
       return { ok: false };
     }
+    view.busy = true; refreshButtons();
     try {
       const reply = await fetch("/api/command", {
         method: "POST", body: JSON.stringify(body),
@@ -287,8 +447,12 @@
     } catch (error) {
       say(`the command did not reach the web teacher: ${error.message}`, false);
       return { ok: false };
+    } finally {
+      view.busy = false; refreshButtons();
     }
   }
+
+  const demonstrate = (body) => command({ ...body, key: newKey() });
 
   function clickedPoint(event) {
     const box = $("overlay").getBoundingClientRect();
@@ -297,21 +461,52 @@
     return [x, y];
   }
 
-  $("overlay").addEventListener("click", async (event) => {
-    const [x, y] = clickedPoint(event);
+  function goalsNear(x, y) {
     const t = view.teaching;
-    if (t) {
-      let best = -1, bestD = 10;
-      t.outcomes.forEach(([gx, gy], i) => {
-        const d = Math.hypot(px(gx) - x, py(gy) - y);
-        if (d <= bestD && !t.reached[i]) { best = i; bestD = d; }
+    if (!t) return [];
+    return t.outcomes.map(([gx, gy], i) => ({ i, d: Math.hypot(px(gx) - x, py(gy) - y) }))
+      .filter((g) => g.d <= PICK_PX).sort((a, b) => a.d - b.d).map((g) => g.i);
+  }
+
+  function closePick() { $("pick").classList.add("hidden"); $("pick-list").textContent = ""; }
+
+  // Several goals under the click, or one already reached: the person picks on purpose.
+  function openPick(indices) {
+    const t = view.teaching, list = $("pick-list");
+    list.textContent = "";
+    for (const i of indices) {
+      const [x, y] = t.outcomes[i];
+      const li = document.createElement("li");
+      const b = document.createElement("button");
+      b.type = "button"; b.className = "demonstrate"; b.dataset.index = String(i);
+      b.textContent = t.reached[i] ? `Demonstrate entry ${i} again` : `Demonstrate entry ${i}`;
+      b.addEventListener("click", async () => {
+        const answer = await demonstrate({ command: "teach", index: i });
+        if (answer.ok) closePick();
       });
-      if (best >= 0) { await command({ command: "teach", index: best }); return; }
+      li.append(b, ` (${x >= 0 ? "+" : ""}${x.toFixed(3)}, ${y >= 0 ? "+" : ""}${y.toFixed(3)}) `
+                   + (t.reached[i] ? "reached already" : "not reached"));
+      list.append(li);
     }
+    $("pick").classList.remove("hidden");
+    refreshButtons();
+  }
+
+  $("overlay").addEventListener("click", async (event) => {
+    if (view.busy) return;  // the answer to the last click is not in yet
+    const [x, y] = clickedPoint(event);
+    const near = goalsNear(x, y);
+    if (near.length === 1 && !view.teaching.reached[near[0]]) {
+      closePick();
+      await demonstrate({ command: "teach", index: near[0] });
+      return;
+    }
+    if (near.length) { openPick(near); return; }
+    closePick();
     const goal = [Math.min(1, Math.max(-1, (x / W) * 2 - 1)), Math.min(1, Math.max(-1, 1 - (y / H) * 2))];
     const answer = await command({ command: "offer", x: goal[0], y: goal[1] });
     if (answer.ok && answer.offer) {
-      view.offer = answer.offer;
+      view.offer = { ...answer.offer, key: newKey() };  // one key per offer: confirmed once
       $("offer-text").textContent = answer.offer.text;
       $("offer").classList.remove("hidden");
     }
@@ -321,20 +516,35 @@
   function closeOffer() { view.offer = null; $("offer").classList.add("hidden"); drawOverlay(true); }
   $("confirm").addEventListener("click", async () => {
     if (!view.offer) return;
-    const answer = await command({ command: "confirm", offer: view.offer.id });
+    const answer = await command({ command: "confirm", offer: view.offer.id, key: view.offer.key });
     if (answer.ok) closeOffer();
   });
   $("cancel").addEventListener("click", closeOffer);
+  $("pick-cancel").addEventListener("click", closePick);
   $("pause").addEventListener("click", () => command({ command: "pace", what: "pause" }));
   $("resume").addEventListener("click", () => command({ command: "pace", what: "resume" }));
   $("step").addEventListener("click", () =>
     command({ command: "pace", what: "step", steps: Number($("step-count").value) || 1 }));
   $("send-action").addEventListener("click", () =>
-    command({ command: "action", text: $("action-text").value }));
+    demonstrate({ command: "action", text: $("action-text").value }));
+  $("close").addEventListener("click", async () => {
+    const answer = await command({ command: "close" });
+    if (answer.ok) { view.linger = { left: null, closed: true }; showOver(); refreshButtons(); }
+  });
 
-  // For tests and people with a console: where teaching goal i is drawn, in canvas pixels.
+  // For tests and people with a console: where teaching goal i is drawn, in canvas pixels;
+  // the marks drawn and the legend's; land or water under a canvas pixel.
   window.teacherPage = {
     teachingPixel: (i) => ({ x: px(view.teaching.outcomes[i][0]), y: py(view.teaching.outcomes[i][1]) }),
+    drawn: () => legendMarks(),
+    legend: () => [...document.querySelectorAll("#legend .entry")].map(
+      (e) => ({ mark: e.dataset.mark, rgb: e.dataset.rgb ? e.dataset.rgb.split(",").map(Number) : null })),
+    surfaceAt: (x, y) => {
+      const s = view.surface;
+      if (!s) return null;
+      const i = Math.min(s.h - 1, Math.floor((y / H) * s.h)) * s.w + Math.min(s.w - 1, Math.floor((x / W) * s.w));
+      return s.wet[i] ? "water" : "land";
+    },
     view, cursor,
   };
 
@@ -346,11 +556,10 @@
       setTimeout(start, 1000);
       return;
     }
-    drawLegend();
     const lake = new Image();
-    lake.onload = () => { view.lake = lake; drawBase(); };
+    lake.onload = () => { view.lake = lake; view.shore = readLake(lake); drawBase(); };
     lake.src = withToken("/lake.png");
-    drawBase(); drawErrors();
+    drawBase(); drawErrors(); refreshButtons();
     poll();
   }
   start();
