@@ -36,9 +36,11 @@ FINISHED = re.compile(r"run finished: (\d+) movements in ([0-9.]+) s")
 
 
 def one_run(out: Path, name: str, movements: int, seed: int, page: bool) -> dict:
+    # --web-linger 0: the open page must not keep the graph up after the run (timed to its end).
     child = subprocess.Popen(
         [str(RUN), "sgim-d", "--seed", str(seed), "--movements", str(movements), "--teacher",
-         "web", "--web-port", "0", "--runs-dir", str(out), "--name", name, "--quiet"],
+         "web", "--web-port", "0", "--web-linger", "0", "--runs-dir", str(out), "--name",
+         name, "--quiet"],
         stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
     stats: dict = {}
     started = time.perf_counter()

@@ -104,6 +104,7 @@ class RunOptions:
     web_port: int = 8765
     web_token: str = ""
     web_address_file: str = ""  # where the web teacher writes its page's address
+    web_linger: float = 600.0  # seconds its page stays after the run for a person looking
 
     def __post_init__(self) -> None:
         problems = []
@@ -138,7 +139,7 @@ OPTION_PARAMETERS = {"learner": "the learner argument", "seed": "--seed",
                                            "movements)",
                      "resume_from": "--resume", "resume_segments": "--resume",
                      "wait_for_teacher": "--wait-for-teacher", "host": "--web-host",
-                     "port": "--web-port", "token": "--web-token",
+                     "port": "--web-port", "token": "--web-token", "linger": "--web-linger",
                      "address_file": "the run folder"}
 SECRETS = ("token",)  # never written into metadata.yaml
 
@@ -325,7 +326,7 @@ def parameters(options: RunOptions, node_overrides: Mapping[str, Mapping[str, An
         values["output"] = options.output
     if options.teacher == "web" and options.learner in SOCIAL:
         values.update(host=options.web_host, port=options.web_port, token=options.web_token,
-                      address_file=options.web_address_file)
+                      address_file=options.web_address_file, linger=float(options.web_linger))
     problems = []
     try:
         shared = check(values, where)

@@ -126,7 +126,8 @@ def plan_new(args: argparse.Namespace) -> Plan:
                          {**files_shared, **assigned}, markers=not args.no_markers,
                          wait_for_teacher=args.wait_for_teacher, web_host=args.web_host,
                          web_port=args.web_port, web_token=args.web_token,
-                         web_address_file=str(run_dir / "web_teacher.url"))
+                         web_address_file=str(run_dir / "web_teacher.url"),
+                         web_linger=args.web_linger)
     values = parameters(options, files_per_node, {**where, **assigned_where})
     nodes = graph(args.learner, args.teacher, not args.no_markers)
     for name in unused({**files_shared, **assigned}, nodes):
@@ -307,6 +308,8 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
             outcome, code = (str(error) if str(error).startswith("aborted") else
                              f"failed: {error}"), 1
         finally:
+            if supervisor is not None and (code == 0 or outcome.startswith("aborted")):
+                keep_page(plan, supervisor.procs.get("web_teacher"))
             with shielded(), supervise.hard_deadline(supervise.TEARDOWN_LIMIT):
                 if progress is not None:
                     progress.spin(0.2)
@@ -337,6 +340,29 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
                 supervise.hard_deadline(supervise.CLOSE_LIMIT):
             progress.close()
     return code
+
+
+def keep_page(plan: Plan, node: subprocess.Popen | None) -> None:
+    """The run is over: before the graph stops, wait while the web teacher keeps its page for
+    the person looking at it (web_teacher_node: it removes its address file once it heard the
+    end, and keeps web_teacher.linger while the page stays). Ctrl-C ends the wait."""
+    linger = float(plan.values.shared.get("linger", 0.0))
+    address = plan.address_file
+    if address is None or node is None or linger <= 0:
+        return
+    lingering = address.with_suffix(".linger")
+    try:
+        deadline = time.monotonic() + 10.0  # the node hears the end with the launcher
+        while address.exists() and node.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.1)
+        if lingering.exists() and node.poll() is None:
+            say(f"the run is over; its page stays for at most {linger:g} s at "
+                f"{lingering.read_text().strip()}: close it there, or press Ctrl-C")
+            deadline = time.monotonic() + linger + 10.0
+            while lingering.exists() and node.poll() is None and time.monotonic() < deadline:
+                time.sleep(0.2)
+    except (Interrupted, OSError):
+        pass  # Ctrl-C: stop now; a file gone while read: the page has closed
 
 
 def quarantine(run_dir: Path) -> dict[str, Any]:

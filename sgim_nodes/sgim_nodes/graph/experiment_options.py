@@ -18,11 +18,12 @@ from sgim_nodes.graph.description import STORAGES, TEACHERS
 REPO = Path(__file__).resolve().parents[3]
 DEFAULTS = {"seed": 0, "movements": 5000, "eval_every": 250, "period": 150,
             "teacher": "automatic", "storage": "mcap", "wait_for_teacher": 0.0,
-            "web_port": 8765, "web_host": "127.0.0.1", "web_token": "", "no_markers": False}
+            "web_port": 8765, "web_host": "127.0.0.1", "web_token": "", "web_linger": 600.0,
+            "no_markers": False}
 # Options a resumed run takes from its folder: giving one with --resume is refused.
 RUN_OPTIONS = ("seed", "movements", "eval_every", "period", "teacher", "storage", "name",
                "param", "params_file", "wait_for_teacher", "web_port", "web_host",
-               "web_token", "no_markers")
+               "web_token", "web_linger", "no_markers")
 FOREVER = ("forever", "inf", "-1")  # --wait-for-teacher values that mean "until it acts"
 WEB_TOKEN_MIN = 16  # the web teacher's own minimum (teacher.web.server.MIN_TOKEN)
 HUMAN_TIMEOUT = 24 * 3600.0  # a person teaches at a person's pace
@@ -95,6 +96,10 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                         "--web-token)")
     p.add_argument("--web-token",
                    help="web teacher: the access token the page's address must carry")
+    p.add_argument("--web-linger", type=float, metavar="SECONDS",
+                   help="web teacher: once the run is over, its page stays while someone "
+                        "looks at it, until closed there or for this long (0: it ends with "
+                        "the run; a run nobody watches ends at once anyway). Default: 600")
     p.add_argument("--no-markers", action="store_const", const=True,
                    help="do not start the markers node (MarkerArray topics for rviz2 and "
                         "Foxglove, recorded in the bag)")
@@ -146,6 +151,8 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         p.error(f"--domain must be in 0..232, got {args.domain}")
     if not 0 <= args.web_port <= 65535:
         p.error("--web-port must be in 0..65535")
+    if not (args.web_linger >= 0 and math.isfinite(args.web_linger)):
+        p.error(f"--web-linger must be a number of seconds >= 0, got {args.web_linger:g}")
     if args.teacher == "web":
         if not is_loopback(args.web_host) and not args.web_token:
             args.web_token = secrets.token_urlsafe(18)
