@@ -22,6 +22,9 @@ Prose about the pond.
 
 <!-- begin generated pond-share -->
 <!-- end generated pond-share -->
+
+<!-- begin generated pond-data -->
+<!-- end generated pond-data -->
 """
 
 
@@ -61,6 +64,7 @@ def test_reproduce_makes_the_runs_once_and_writes_the_page(repo, capsys):
     assert [p.name for p in runs] == ["casts-seed3-chunk0.npz", "casts-seed3-chunk1.npz"]
     text = (repo / "docs" / "pond.md").read_text()
     assert "Prose about the pond." in text and "| random casts | 20 (" in text
+    assert "| benchmark goals in it (`benchmark_goals.npz`) |" in text
     made = pages.provenance_of(text, "pond")
     experiment = pinned.find("pond")
     assert made.fingerprint == experiment.fingerprint()

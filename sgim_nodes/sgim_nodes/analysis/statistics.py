@@ -303,11 +303,12 @@ def _coverage_test(a: Coverage, b: Coverage) -> CoverageTest:
                         u, mw_p, fisher_p_holm=fisher_p, own_share_p_holm=mw_p, **base)
 
 
-def coverage_tests(coverage: dict[str, Coverage]) -> list[CoverageTest]:
-    """Every pair of learners (two-sided tests), Holm's correction over all the table's
-    p-values, Fisher's and Mann-Whitney's together."""
-    tests = [_coverage_test(coverage[a], coverage[b])
-             for a, b in combinations(list(coverage), 2)]
+def coverage_tests(coverage: dict[str, Coverage],
+                   pairs: Sequence[tuple[str, str]] | None = None) -> list[CoverageTest]:
+    """The given pairs (default: every pair of learners; two-sided tests), Holm's correction
+    over all the table's p-values, Fisher's and Mann-Whitney's together."""
+    pairs = list(combinations(list(coverage), 2)) if pairs is None else list(pairs)
+    tests = [_coverage_test(coverage[a], coverage[b]) for a, b in pairs]
     corrected = holm([p for t in tests for p in (t.fisher_p, t.own_share_p)])
     return [replace(t, fisher_p_holm=corrected[2 * k], own_share_p_holm=corrected[2 * k + 1])
             for k, t in enumerate(tests)]

@@ -48,4 +48,37 @@ def make(experiment: Experiment, runs_dir: Path, figures_dir: Path) -> Report:
         f"| casting time | {seconds / 60:.1f} min of CPU ({n / seconds:.1f} casts/s) |",
     ]
     report.add(page, "pond-share", "\n".join(table))
+    report.add(page, "pond-data", pond_data())
     return report
+
+
+def pond_data() -> str:
+    """What the world's data files hold of the pond: its teaching entries, its benchmark
+    goals and their floor, the map's landings there."""
+    from sim_bridge.data_files import (
+        in_isolated_region,
+        load_benchmark_goals,
+        load_floor,
+        load_reachable_map,
+        load_teaching_set,
+    )
+
+    teaching = load_teaching_set()
+    entries = np.flatnonzero(in_isolated_region(teaching.outcomes))
+    goals = np.asarray(load_benchmark_goals(), float)
+    inside = in_isolated_region(goals)
+    floor = np.asarray(load_floor().per_goal, float).ravel()
+    mapped = np.asarray(load_reachable_map(), float)
+    shown = "; ".join(f"entry {k} of {len(teaching.outcomes)}, mean outcome "
+                      f"({teaching.outcomes[k][0]:.3f}, {teaching.outcomes[k][1]:.3f}), "
+                      f"spread {teaching.spread[k]:.3f}" for k in entries) or "none"
+    rows = ["| what | figure |", "|---|---|",
+            f"| teaching set (`teaching_set.npz`) | {shown} |",
+            f"| benchmark goals in it (`benchmark_goals.npz`) | {int(inside.sum())} of "
+            f"{len(goals)} |",
+            f"| the floor on those goals (`benchmark_floor.npz`) | "
+            f"{floor[inside].mean():.3f}, against {floor[~inside].mean():.3f} on the others |"
+            if inside.any() else "| the floor on those goals | no goal in it |",
+            f"| landings in it of the dense map (`reachable_map.npz`) | "
+            f"{int(in_isolated_region(mapped).sum())} of {len(mapped)} |"]
+    return "\n".join(rows)

@@ -1,0 +1,84 @@
+"""ros_ws/reproduce.sh on a tiny graph experiment: runs made through the sweep driver, the
+study report written into its two pages with their provenance, and a run another experiment
+made with the same learner taken rather than made again."""
+
+from __future__ import annotations
+
+import textwrap
+
+import pytest
+import yaml
+
+from sgim_nodes.experiments import cli, pages, pinned
+from sgim_nodes.experiments.pinned import pin_of
+from sgim_nodes.experiments.reports.study import own_runs  # noqa: F401  (imported: it loads)
+from sgim_nodes.provenance.fingerprint import data_files
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+STUDY_BLOCKS = ("provenance", "final-errors", "error-curve", "pairwise", "isolated-coverage",
+                "isolated-tests", "goal-groups", "findings", "cost")
+
+
+def page(title: str, names) -> str:
+    return f"# {title}\n\nProse.\n\n" + "\n".join(
+        f"<!-- begin generated {n} -->\n<!-- end generated {n} -->\n" for n in names)
+
+
+def experiment(name: str, pages_: list[str], learners: list[str], seeds: list[int]) -> str:
+    pins = {n: pin_of(p) for n, p in data_files().items()}
+    return textwrap.dedent(f"""\
+        name: {name}
+        maker: graph
+        report: study
+        pages: {pages_}
+        data: {yaml.safe_dump(pins, default_flow_style=True, width=10**4).strip()}
+        runs:
+          movements: 40
+          eval_every: 20
+          period: 20
+          seeds: {seeds}
+          learner: {learners}
+        """)
+
+
+def test_a_graph_experiment_is_made_reported_and_shares_its_runs(tmp_path, monkeypatch,
+                                                                  capsys):
+    (tmp_path / "experiments").mkdir()
+    (tmp_path / "docs").mkdir()
+    (tmp_path / "docs" / "results.md").write_text(page("Results", STUDY_BLOCKS))
+    (tmp_path / "README.md").write_text(page("Readme", ("provenance", "summary")))
+    (tmp_path / "docs" / "other.md").write_text(page("Other", STUDY_BLOCKS))
+    (tmp_path / "docs" / "other_readme.md").write_text(page("Other", ("provenance", "summary")))
+    (tmp_path / "experiments" / "tiny.yaml").write_text(experiment(
+        "tiny", ["docs/results.md", "README.md"], ["sgim-d", "random"], [0, 1]))
+    (tmp_path / "experiments" / "other.yaml").write_text(experiment(
+        "other", ["docs/other.md", "docs/other_readme.md"], ["sgim-d"], [1]))
+    for module in (pinned, cli):
+        monkeypatch.setattr(module, "REPO", tmp_path)
+        monkeypatch.setattr(module, "EXPERIMENTS", tmp_path / "experiments")
+    monkeypatch.setattr(cli, "FIGURES", tmp_path / "docs" / "figures")
+    monkeypatch.setenv("SGIM_EXPERIMENT_RUNS", str(tmp_path / "runs"))
+
+    assert cli.main(["tiny", "--parallel", "2"]) == 0, capsys.readouterr().err[-3000:]
+    results = (tmp_path / "docs" / "results.md").read_text()
+    blocks = pages.blocks_of(results)
+    assert "| sgim-d | 2 |" in blocks["final-errors"]
+    assert "SAGG-RIAC is missing" in blocks["findings"]
+    assert pages.provenance_of(results, "tiny").fingerprint == pinned.find("tiny").fingerprint()
+    readme = (tmp_path / "README.md").read_text()
+    assert "| SGIM-D |" in pages.blocks_of(readme)["summary"]
+    for figure in ("study_error_curves.png", "study_landings_frames.png"):
+        assert (tmp_path / "docs" / "figures" / figure).stat().st_size > 10_000
+    assert cli.main(["--check"]) == 1  # 'other' was never made
+    capsys.readouterr()
+
+    # 'other' needs sgim-d seed 1 with the same settings: taken from 'tiny', not made again
+    assert cli.main(["other"]) == 0
+    err = capsys.readouterr().err
+    assert "1 run(s) taken from other experiments" in err, err
+    assert "sgim-d-P20-seed1 (tiny)" in err and "1 already finished, 0 to do" in err, err
+    mine = tmp_path / "runs" / "other" / "sgim-d-P20-seed1" / "metadata.yaml"
+    theirs = tmp_path / "runs" / "tiny" / "sgim-d-P20-seed1" / "metadata.yaml"
+    assert mine.stat().st_ino == theirs.stat().st_ino  # linked, not copied
+    assert cli.main(["--check"]) == 0
