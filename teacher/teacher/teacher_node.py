@@ -21,10 +21,15 @@ and only a pair shown whole enters the mirrored memory, as the learner's. "Reach
                  landed within the tolerance of it.
 Its random stream "teacher" and its world's stream make its choices those of the
 single-process runner for the same seed.
+Every turn's judgement is recorded (issue 31): before the turn's demonstration it publishes one
+TeacherCheck per teaching goal on `teacher_checks` (the goal, the action the learner's model
+gave, where its world landed it or the learner's own outcome nearest it, the distance, the
+tolerance, the verdict, the entry shown), from which an auditor redoes the turn; no learner
+node reads them.
 
 Interfaces:
   subscribes  movements, demonstrations_taken, run_status, help_requests (on-request only)
-  publishes   demonstrations (sgim_msgs/Demonstration)
+  publishes   teacher_checks (sgim_msgs/TeacherCheck), demonstrations (sgim_msgs/Demonstration)
 Parameters: the common ones, the memory and inverse-model fields of LearnerConfig,
 demonstration_period, reached_rule, teacher_choice, demonstration_content, timing,
 tolerance_noise, noise (of the teacher's own world), teaching_set, movements.
@@ -33,9 +38,10 @@ tolerance_noise, noise (of the teacher's own world), teaching_set, movements.
 from __future__ import annotations
 
 import numpy as np
+from builtin_interfaces.msg import Time
 from rclpy.node import Node
 
-from sgim_msgs.msg import Demonstration, HelpRequest, RunStatus
+from sgim_msgs.msg import Demonstration, HelpRequest, RunStatus, TeacherCheck
 from sgim_nodes.bag.record_checks import Limits
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.bag.validation import LiveGate
@@ -54,6 +60,7 @@ from sgim_nodes.core.teaching import (
     REACHED_RULES,
     TEACHER_CHOICES,
     Teacher,
+    Turn,
     learner_progress,
 )
 from sgim_nodes.core.teaching import (
@@ -118,6 +125,7 @@ class TeacherNode(Node):
                                p["tolerance_noise"] * p["outcome_noise"],
                                p["teacher_choice"])
         self.rule = p["reached_rule"]
+        self.choice = p["teacher_choice"]
         self.content = p["demonstration_content"]
         self.on_request = p["timing"] == ON_REQUEST
         self.requests: dict[int, HelpRequest] = {}  # asks waiting for the mirror to catch up
@@ -142,6 +150,9 @@ class TeacherNode(Node):
             self.answered = set(point.demonstration_turns)
             self.answered_requests = set(point.help_requests_answered)
             self.given = point.demonstrations_given
+        # The arbiter waits for a publisher of both and for the recorder to match them
+        # (nodes/graph_startup.py): no turn's checks are lost, the first one's included.
+        self._checks = self.create_publisher(TeacherCheck, "teacher_checks", qos.RECORDS)
         self._out = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
         # The arbiter starts once these have matched (sgim_ros/ready.py): a missed movement
         # would leave the mirrored memory, and so the teacher's choice, behind the learner's.
@@ -214,7 +225,7 @@ class TeacherNode(Node):
         if not self.teacher.due(k):
             return
         self.answered.add(k)
-        self._publish(self.teacher.choose(self._reached()), k)
+        self._publish(self.teacher.decide(self._reached()), k)
 
     def _maybe_answer(self) -> None:
         """Answer each ask once the mirrored memory is at its count (the learner waits there,
@@ -232,12 +243,31 @@ class TeacherNode(Node):
             self.answered_requests.add(index)
             self.get_logger().info(f"help request {index} at movement {self.count}, goal "
                                    f"{np.round(vec(ask.goal), 3)}")
-            self._publish(self.teacher.answer(vec(ask.goal), self._reached()), self.count,
+            self._publish(self.teacher.decide(self._reached(), vec(ask.goal)), self.count,
                           index)
 
-    def _publish(self, demo: Shown | None, k: int, request: int = 0) -> None:
-        """Show `demo` (None: nothing left to show) as `demonstration_content` says."""
-        msg = Demonstration(stamp=self.get_clock().now().to_msg(), movement_index=k,
+    def _publish_checks(self, turn: Turn, k: int, request: int, stamp: Time) -> None:
+        """The turn's checks, one TeacherCheck per teaching goal, as the runner writes them
+        (core/runner.py check_records): what an auditor redoes the turn from."""
+        asked = floats(turn.asked)
+        for check in turn.checks:
+            self._checks.publish(TeacherCheck(
+                stamp=stamp, movement_index=k, help_request=request, asked_goal=asked,
+                rule=self.rule, choice=self.choice, entries=len(turn.checks),
+                teaching_set_index=check.index, goal=floats(check.goal),
+                action=floats(check.action), status=int(check.status),
+                landed=floats(check.landed), own_outcomes=check.own_outcomes,
+                distance=float(check.distance),
+                tolerance=float(check.tolerance), reached=check.reached,
+                chosen=check.index == turn.chosen))
+
+    def _publish(self, turn: Turn, k: int, request: int = 0) -> None:
+        """Publish the turn's checks, then show its demonstration (None: nothing left to
+        show) as `demonstration_content` says."""
+        stamp = self.get_clock().now().to_msg()
+        self._publish_checks(turn, k, request, stamp)
+        demo: Shown | None = turn.demonstration
+        msg = Demonstration(stamp=stamp, movement_index=k,
                             teaching_set_index=-1, source=AUTOMATIC, content=self.content,
                             help_request=request)
         if demo is not None:

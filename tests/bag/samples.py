@@ -1,9 +1,10 @@
 """A small synthetic run as rosbags messages (no rclpy), and a writer for it.
 
 The run mimics the node graph's contract: movements 1..n, a goal and a competence every few
-movements, a help request mid-run answered by a demonstration (offered, then taken by the
-arbiter) followed by imitation movements, region maps, evaluations
-and a final RunStatus. Values are seeded so tests can rebuild the same records directly.
+movements, a help request mid-run answered by a demonstration (the teacher's checks, then the
+demonstration offered, then taken by the arbiter) followed by imitation movements, region
+maps, evaluations and a final RunStatus. Values are seeded so tests can rebuild the same
+records directly.
 """
 
 from __future__ import annotations
@@ -81,6 +82,27 @@ def help_request(index: int, movement_index: int, rng: np.random.Generator):
                                           goal=rng.uniform(-1, 1, 2))
 
 
+TEACHING_ENTRIES = 8  # a turn's checks: a teaching set no smaller than any test's limits
+
+
+def teacher_checks(movement_index: int, help_request: int, asked_goal, chosen: int,
+                   rng: np.random.Generator) -> list:
+    """A turn's TeacherChecks under the ability rule: entry `chosen` unreached and shown,
+    every other reached."""
+    out = []
+    for k in range(TEACHING_ENTRIES):
+        goal = rng.uniform(-0.9, 0.9, 2)
+        landed = goal + (0.3 if k == chosen else 0.001)
+        distance = float(np.sqrt(((landed - goal) ** 2).sum()))
+        out.append(T["sgim_msgs/msg/TeacherCheck"](
+            stamp=stamp(31), movement_index=movement_index, help_request=help_request,
+            asked_goal=np.asarray(asked_goal, float), rule="ability", choice="random-unreached",
+            entries=TEACHING_ENTRIES, teaching_set_index=k, goal=goal,
+            action=rng.uniform(-1, 1, 24), status=0, landed=landed, own_outcomes=0,
+            distance=distance, tolerance=0.05, reached=distance <= 0.05, chosen=k == chosen))
+    return out
+
+
 def evaluation(movement_index: int, rng: np.random.Generator):
     goals = rng.uniform(-1, 1, (3, 2))
     reached = goals + 0.1
@@ -113,9 +135,14 @@ def synthetic_run(n: int = 60, seed: int = 0) -> list[tuple[str, object]]:
         if i % 5 == 1:
             goal_count += 1
             out.append(("goals", goal(goal_count, i - 1, rng)))
-        if i == n // 2:  # the learner asks at count i - 1; the answer, taken; its imitation
-            out.append(("help_requests", help_request(1, i - 1, rng)))
+        if i == n // 2:  # the learner asks at count i - 1; the teacher's checks, the answer,
+            # taken; its imitation
+            ask = help_request(1, i - 1, rng)
+            out.append(("help_requests", ask))
             demo = demonstration(1, i - 1, rng, help_request=1)
+            # Their own stream: the other records keep the values they always had.
+            out += [("teacher_checks", c) for c in teacher_checks(
+                i - 1, 1, ask.goal, demo.teaching_set_index, np.random.default_rng([seed, 31]))]
             out += [("demonstrations", demo), ("demonstrations_taken", demo)]
         process = 2 if n // 2 <= i < n // 2 + 5 else (1 if i % 4 == 0 else 0)
         out.append(("movements", movement(i, rng, process, status=1 if i % 7 == 0 else 0)))

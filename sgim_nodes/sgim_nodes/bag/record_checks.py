@@ -19,7 +19,15 @@ from typing import Any
 import numpy as np
 
 from sgim_nodes.core.environment import PROCESS_CODES, Status
-from sgim_nodes.core.teaching import DEMONSTRATION_CONTENTS, GOAL_ONLY, MEANS_AND_GOAL, MEANS_ONLY
+from sgim_nodes.core.teaching import (
+    ABILITY,
+    DEMONSTRATION_CONTENTS,
+    GOAL_ONLY,
+    MEANS_AND_GOAL,
+    MEANS_ONLY,
+    REACHED_RULES,
+    TEACHER_CHOICES,
+)
 
 BOUND = 1.0  # actions, outcomes, goals and regions live in [-1, 1]^n
 # Processes and statuses a published Movement may carry: the evaluator's and a human's
@@ -224,6 +232,71 @@ def check_help_request(h: Any, limits: Limits) -> Problem | None:
     return problem or vector_problem(h.goal, limits.outcome_size, "asked goal")
 
 
+def check_teacher_check(c: Any, limits: Limits) -> Problem | None:
+    """One teaching goal judged at a teacher's turn (TeacherCheck.msg): a known rule, choice
+    and entry of the turn and of the teaching set, at a count before the budget is spent; its
+    distance the one from its goal to where it landed (infinite when nothing landed) and its
+    verdict the one its distance and tolerance give, so that an auditor's recomputation of the
+    turn stands on numbers that agree with each other."""
+    rule, choice = str(c.rule), str(c.choice)
+    if rule not in REACHED_RULES:
+        return Problem("bad-value", f"reached rule {rule!r} is not one of "
+                                    f"{', '.join(REACHED_RULES)}")
+    if choice not in TEACHER_CHOICES:
+        return Problem("bad-value", f"teacher choice {choice!r} is not one of "
+                                    f"{', '.join(TEACHER_CHOICES)}")
+    entries, k = int(c.entries), int(c.teaching_set_index)
+    size = limits.teaching_set_size
+    if not 0 <= k < entries or (size and k >= size):
+        return Problem("unknown-teaching-index", f"teaching-set index {k} is not an entry of "
+                                                 f"a turn of {entries} checks"
+                                                 + (f" (the set has {size})" if size else ""))
+    problem = _index_problem(c.movement_index, "movement index", limits)
+    if problem is None and limits.budget and int(c.movement_index) >= limits.budget:
+        problem = Problem("beyond-budget", f"a teacher's turn at movement "
+                                           f"{int(c.movement_index)}: the budget of "
+                                           f"{limits.budget} is spent")
+    if problem:
+        return problem
+    asked = _values(c.asked_goal)
+    if (int(c.help_request) > 0) != (asked.size > 0):
+        return Problem("bad-value", "an answer to a help request carries the goal asked "
+                                    "about, and a periodic turn none")
+    problem = (vector_problem(c.asked_goal, limits.outcome_size, "asked goal", allow_empty=True)
+               or vector_problem(c.goal, limits.outcome_size, "goal judged")
+               or (vector_problem(c.action, limits.action_size, "inverse model's action")
+                   if rule == ABILITY else
+                   vector_problem(c.action, 0, "action of an own-movements check",
+                                  allow_empty=True))
+               or vector_problem(c.landed, limits.outcome_size, "landing point", bound=None,
+                                 allow_empty=True))
+    if problem:
+        return problem
+    if int(c.status) not in set(Status):
+        return Problem("bad-value", f"status {int(c.status)} is unknown")
+    landed = _values(c.landed)
+    if int(c.status) == Status.OK and rule == ABILITY and landed.size == 0:
+        return Problem("bad-value", "a cast with status OK landed somewhere")
+    tolerance, distance = float(c.tolerance), float(c.distance)
+    if not math.isfinite(tolerance) or tolerance < 0:
+        return Problem("bad-value", f"tolerance {tolerance} must be finite and >= 0")
+    if landed.size == 0:
+        if distance != math.inf:
+            return Problem("bad-value", f"distance {distance} where nothing landed: must be "
+                                        "infinite")
+    else:
+        expected = float(np.sqrt(((landed - _values(c.goal)) ** 2).sum()))
+        if not math.isfinite(distance) or abs(distance - expected) > 1e-9 * max(1.0, expected):
+            return Problem("bad-value", f"distance {distance} is not the one from the goal to "
+                                        f"where it landed ({expected})")
+    if bool(c.reached) != (distance <= tolerance):
+        return Problem("bad-value", f"verdict reached={bool(c.reached)}, but distance "
+                                    f"{distance} and tolerance {tolerance} say otherwise")
+    if bool(c.chosen) and bool(c.reached):
+        return Problem("bad-value", f"entry {k} is reached: the teacher never shows it")
+    return None
+
+
 def check_evaluation(e: Any, limits: Limits) -> Problem | None:
     """`reached` may hold land touch-downs outside [-1, 1]^m, or NaN when nothing came down."""
     size = int(e.outcome_size)
@@ -294,6 +367,7 @@ CHECKS = {
     "demonstrations": check_demonstration,
     "demonstrations_taken": check_demonstration,
     "help_requests": check_help_request,
+    "teacher_checks": check_teacher_check,
     "evaluations": check_evaluation,
     "run_status": check_run_status,
     "region_map": check_region_map,

@@ -122,6 +122,36 @@ class HelpRequestRecord:
 
 
 @dataclass
+class TeacherCheckRecord:
+    """One teaching goal judged at one of the automatic teacher's turns (TeacherCheck.msg):
+    what an auditor redoes the turn's decision from (core/teaching.py, eligible)."""
+
+    time_ns: int
+    stamp_ns: int
+    movement_index: int
+    help_request: int
+    asked_goal: np.ndarray  # empty at a periodic turn
+    rule: str
+    choice: str
+    entries: int
+    teaching_set_index: int
+    goal: np.ndarray
+    action: np.ndarray  # empty under own-movements
+    status: int
+    landed: np.ndarray  # empty when nothing came down
+    own_outcomes: int
+    distance: float  # inf when landed is empty
+    tolerance: float
+    reached: bool
+    chosen: bool
+
+    @property
+    def turn(self) -> tuple[int, int]:
+        """Which turn it belongs to: (movement count, HelpRequest.index or 0)."""
+        return self.movement_index, self.help_request
+
+
+@dataclass
 class EvaluationRecord:
     time_ns: int
     stamp_ns: int
@@ -163,6 +193,7 @@ class RunRecords:
     demonstrations: list[DemonstrationRecord] = field(default_factory=list)
     demonstrations_taken: list[DemonstrationRecord] = field(default_factory=list)
     help_requests: list[HelpRequestRecord] = field(default_factory=list)
+    teacher_checks: list[TeacherCheckRecord] = field(default_factory=list)
     evaluations: list[EvaluationRecord] = field(default_factory=list)
     run_status: list[RunStatusRecord] = field(default_factory=list)
     quarantined: list = field(default_factory=list)  # validation.Quarantined
@@ -217,6 +248,13 @@ def to_record(kind: type, time_ns: int, m) -> object:
                                    int(getattr(m, "help_request", 0)))
     if kind is HelpRequestRecord:
         return HelpRequestRecord(t, s, int(m.index), int(m.movement_index), _vec(m.goal))
+    if kind is TeacherCheckRecord:
+        return TeacherCheckRecord(t, s, int(m.movement_index), int(m.help_request),
+                                  _vec(m.asked_goal), str(m.rule), str(m.choice),
+                                  int(m.entries), int(m.teaching_set_index), _vec(m.goal),
+                                  _vec(m.action), int(m.status), _vec(m.landed),
+                                  int(m.own_outcomes), float(m.distance), float(m.tolerance),
+                                  bool(m.reached), bool(m.chosen))
     if kind is EvaluationRecord:
         return EvaluationRecord(t, s, int(m.movement_index), float(m.mean_distance),
                                 _rows(m.goals, m.outcome_size), _rows(m.reached, m.outcome_size),
@@ -235,6 +273,7 @@ RECORD_TYPES: dict[str, type] = {
     "demonstrations": DemonstrationRecord,
     "demonstrations_taken": DemonstrationRecord,
     "help_requests": HelpRequestRecord,
+    "teacher_checks": TeacherCheckRecord,
     "evaluations": EvaluationRecord,
     "run_status": RunStatusRecord,
 }

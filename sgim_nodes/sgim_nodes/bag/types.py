@@ -28,6 +28,7 @@ TOPICS: dict[str, str] = {
     "demonstrations": f"{PACKAGE}/msg/Demonstration",
     "demonstrations_taken": f"{PACKAGE}/msg/Demonstration",
     "help_requests": f"{PACKAGE}/msg/HelpRequest",
+    "teacher_checks": f"{PACKAGE}/msg/TeacherCheck",
     "evaluations": f"{PACKAGE}/msg/Evaluation",
     "run_status": f"{PACKAGE}/msg/RunStatus",
 }

@@ -51,8 +51,11 @@ def arbiter_graph(learner: str, social: bool, automatic: bool, wait_for_recorder
             expected.servers.append((register, "register_demonstration"))
     if social:
         expected.servers.append((imitate, "imitate"))
+    # The teacher's checks too: the recorder must have matched their publisher before the
+    # first turn, at movement 0 (sgim_ros/ready.py asks only about publishers seen).
     expected.publishers = [topic for needed, topic in ((wait_for_evaluation, "evaluations"),
-                                                       (automatic, "demonstrations"))
+                                                       (automatic, "demonstrations"),
+                                                       (automatic, "teacher_checks"))
                            if needed]
     wanted = [
         (wait_for_recorder, "recorder_ready",

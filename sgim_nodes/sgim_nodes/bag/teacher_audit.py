@@ -1,0 +1,80 @@
+"""Redo the automatic teacher's turns from a bag's TeacherCheck records alone (issue 31).
+
+With the `ability` rule the teacher judges each teaching goal by casting the learner's inverse
+model in a world of its own, and nothing of those casts reached the bag before: nobody could
+tell why a turn was silent or why an entry was shown again. Now each turn leaves one
+TeacherCheck per teaching goal (teacher_checks), and this module redoes the turn from them: the
+verdicts from distance and tolerance, the entries the teacher could draw among
+(core/teaching.py, eligible), and the draw itself, with the teacher's random stream from the
+run's seed (RunStatus.seed). The draw replays only a run recorded in one piece (a resumed
+teacher starts its stream afresh); everything else holds for any bag. Nothing here imports
+rclpy.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+
+from sgim_nodes.bag.records import TeacherCheckRecord
+from sgim_nodes.core.random_streams import component_rng
+from sgim_nodes.core.teaching import eligible
+
+
+@dataclass(frozen=True)
+class AuditedTurn:
+    """One teacher's turn as its checks say it: which entries it could show, which one its
+    stream draws (-1: silent; None: no seed given) and which its checks mark shown."""
+
+    movement_index: int
+    help_request: int  # the HelpRequest.index it answers; 0 at a periodic turn
+    checks: tuple[TeacherCheckRecord, ...]  # in teaching-set order
+    eligible: np.ndarray  # teaching-set rows it could draw among; empty: silent
+    drawn: int | None  # what the teacher's stream draws among them (-1 when silent)
+    marked: tuple[int, ...]  # the rows whose check says `chosen`: one, or none when silent
+
+    @property
+    def verdicts_hold(self) -> bool:
+        """Every check's verdict is the one its distance and tolerance give."""
+        return all(c.reached == (c.distance <= c.tolerance) for c in self.checks)
+
+
+class IncompleteTurn(ValueError):
+    """A turn's checks are not one per teaching-set entry (records lost or forged)."""
+
+
+def turns(checks: Iterable[TeacherCheckRecord]) -> list[tuple[TeacherCheckRecord, ...]]:
+    """The checks grouped by turn, in recording order, each in teaching-set order;
+    IncompleteTurn when a turn lacks an entry, has one twice, or mixes rules or tolerances."""
+    grouped: dict[tuple[int, int], list[TeacherCheckRecord]] = {}
+    for check in checks:
+        grouped.setdefault(check.turn, []).append(check)
+    out = []
+    for (movement, ask), group in grouped.items():
+        group.sort(key=lambda c: c.teaching_set_index)
+        first = group[0]
+        if ([c.teaching_set_index for c in group] != list(range(first.entries))
+                or len({(c.entries, c.rule, c.choice, c.tolerance) for c in group}) != 1):
+            raise IncompleteTurn(f"the turn at movement {movement} (help request {ask}) has "
+                                 f"checks of entries {[c.teaching_set_index for c in group]}, "
+                                 f"not one of each of its {first.entries}")
+        out.append(tuple(group))
+    return out
+
+
+def redo(checks: Iterable[TeacherCheckRecord], seed: int | None = None) -> list[AuditedTurn]:
+    """Every turn redone from its checks; with the run's `seed`, the teacher's draws too."""
+    rng = None if seed is None else component_rng(seed, "teacher")
+    audited = []
+    for group in turns(checks):
+        first = group[0]
+        asked = first.asked_goal if len(first.asked_goal) else None
+        pool = eligible(np.array([c.distance for c in group]), first.tolerance, first.choice,
+                        np.array([c.goal for c in group]), asked)
+        drawn = None if rng is None else -1 if len(pool) == 0 else int(rng.choice(pool))
+        marked = tuple(c.teaching_set_index for c in group if c.chosen)
+        audited.append(AuditedTurn(first.movement_index, first.help_request, group, pool,
+                                   drawn, marked))
+    return audited
