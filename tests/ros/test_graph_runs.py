@@ -56,6 +56,40 @@ def finish(child, tmp_path, learner, timeout=330):
 run_single_process = runner_records
 
 
+def assert_the_teachers_checks(run, records) -> None:
+    """Issue 31: every turn of the automatic teacher is in the bag's teacher_checks, one check
+    per teaching goal, and is redone from them alone (with the run's seed, RunStatus.seed): the
+    entry its Demonstration shows, or its silence; and they are the runner's checks, number for
+    number (the teacher's casts in its own world included)."""
+    from sgim_nodes.bag.teacher_audit import redo
+
+    audited = redo(run.teacher_checks, run.run_status[0].seed)
+    demos = [d for d in run.demonstrations if d.source == "automatic"]
+    assert [(t.movement_index, t.help_request) for t in audited] == [
+        (d.movement_index, d.help_request) for d in demos]
+    for turn, demo in zip(audited, demos, strict=True):
+        assert turn.verdicts_hold, turn.movement_index
+        assert turn.drawn == demo.teaching_set_index, turn.movement_index  # -1: silent
+        assert list(turn.marked) == [i for i in [demo.teaching_set_index] if i >= 0]
+    expected = [r for r in records if r["type"] == "teacher_check"]
+    assert len(run.teacher_checks) == len(expected) > 0
+
+    def vec(values) -> np.ndarray:
+        return np.asarray([] if values is None else values, dtype=float)
+
+    for got, want in zip(run.teacher_checks, expected, strict=True):
+        where = (got.movement_index, got.teaching_set_index)
+        assert (got.movement_index, got.help_request, got.teaching_set_index, got.rule,
+                got.choice, got.entries, got.status, got.own_outcomes, got.reached,
+                got.chosen) == (want["movement"], want["help_request"], want["teaching_index"],
+                                want["rule"], want["choice"], want["entries"], want["status"],
+                                want["own_outcomes"], want["reached"], want["chosen"]), where
+        for name in ("asked_goal", "goal", "action", "landed"):
+            assert np.array_equal(getattr(got, name), vec(want[name])), (name, where)
+        assert got.distance == (np.inf if want["distance"] is None else want["distance"])
+        assert got.tolerance == want["tolerance"], where
+
+
 def test_the_teachers_choice_rule_through_the_graph(ros_processes, ros_domain, tmp_path):
     """teacher_choice (issue 14) as a node parameter: the graph's teacher demonstrates the
     same goals as the runner's with the same rule, and the learner makes the same movements."""
@@ -70,9 +104,41 @@ def test_the_teachers_choice_rule_through_the_graph(ros_processes, ros_domain, t
     default = [r["teaching_index"] for r in run_single_process("sgim-d")
                if r["type"] == "demonstration"]
     assert default != expected  # the rule changed what was taught
+    assert_the_teachers_checks(run, records)
     moves = [r for r in records if r["type"] == "movement"]
     for graph_move, move in zip(run.movements, moves, strict=True):
         assert np.array_equal(graph_move.action, np.asarray(move["action"])), graph_move.index
+
+
+def test_the_own_movements_rule_s_checks_through_the_graph(ros_processes, ros_domain,
+                                                           tmp_path):
+    """reached_rule own-movements (issue 31): no cast; each check names the learner's own
+    outcome nearest its goal, which an auditor finds again among the bag's movements before
+    the turn (goal-directed, exploration or random, with an outcome); the checks are the
+    runner's and redo every turn, the silent ones (most, with this lenient tolerance) too."""
+    from sgim_msgs.msg import Movement
+
+    run = finish(run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--param",
+                           f"tolerance_noise={TOLERANCE['sgim-d']}", "--param",
+                           "reached_rule=own-movements"), tmp_path, "sgim-d")
+    records = run_single_process("sgim-d", teacher_rule="own-movements")
+    moves = [r for r in records if r["type"] == "movement"]
+    for graph_move, move in zip(run.movements, moves, strict=True):
+        assert np.array_equal(graph_move.action, np.asarray(move["action"])), graph_move.index
+    assert_the_teachers_checks(run, records)
+    own = {Movement.PROCESS_GOAL_DIRECTED, Movement.PROCESS_EXPLORATION, Movement.PROCESS_RANDOM}
+    for check in run.teacher_checks:
+        assert check.rule == "own-movements" and len(check.action) == 0
+        outcomes = np.array([m.outcome for m in run.movements
+                             if m.index <= check.movement_index and m.process in own
+                             and m.status == Movement.STATUS_OK]).reshape(-1, 2)
+        assert check.own_outcomes == len(outcomes)
+        if len(outcomes) == 0:
+            assert len(check.landed) == 0 and check.distance == np.inf
+            continue
+        gaps = np.linalg.norm(outcomes - check.goal, axis=1)
+        assert check.distance == pytest.approx(gaps.min(), rel=1e-12, abs=0)
+        assert any(np.array_equal(check.landed, y) for y in outcomes[gaps == gaps.min()])
 
 
 def social_mode_run(ros_processes, ros_domain, tmp_path, name, seed=SEED, **teacher):
@@ -91,6 +157,7 @@ def social_mode_run(ros_processes, ros_domain, tmp_path, name, seed=SEED, **teac
         assert np.array_equal(graph_move.action, np.asarray(move["action"])), graph_move.index
     evaluations = [r["mean_distance"] for r in records if r["type"] == "evaluation"]
     assert [e.mean_distance for e in run.evaluations] == pytest.approx(evaluations, abs=1e-12)
+    assert_the_teachers_checks(run, records)
     shown = [(d.movement_index, d.teaching_set_index) for d in run.demonstrations if d.shown]
     expected = [(r["movement"], r["teaching_index"]) for r in records
                 if r["type"] == "demonstration"]
@@ -298,6 +365,10 @@ def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner)
         assert np.array_equal(graph_move.action, np.asarray(move["action"])), graph_move.index
     evaluations = [r["mean_distance"] for r in records if r["type"] == "evaluation"]
     assert [e.mean_distance for e in run.evaluations] == pytest.approx(evaluations, abs=1e-12)
+    if learner in ("sgim-d", "demo-only"):  # the automatic teacher's turns, silent ones too
+        assert_the_teachers_checks(run, records)
+    else:
+        assert run.teacher_checks == []
 
 
 def test_a_demonstration_mid_goal_is_handled_at_the_next_movement_boundary(
