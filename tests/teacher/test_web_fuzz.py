@@ -153,9 +153,15 @@ COMMANDS = st.sampled_from(["teach", "offer", "confirm", "action", "pace", "clos
 
 # Mostly command-shaped objects whose fields are right (often enough to reach every
 # decision), wrong or absurd; sometimes any JSON at all.
+def often(good, bad=JSON, times: int = 3):
+    """``good`` about ``times`` times as often as ``bad`` (one_of merges equal strategies, so
+    the copies are made distinct)."""
+    return st.one_of(*[good.map(lambda value: value) for _ in range(times)], bad)
+
+
 NAMED_COMMANDS = st.fixed_dictionaries(
-    {"command": COMMANDS, "key": GOOD["key"] | JSON},
-    optional={name: good | JSON for name, good in GOOD.items() if name != "key"})
+    {"command": COMMANDS, "key": often(st.uuids().map(lambda u: u.hex), KEYS | JSON, 4)},
+    optional={name: often(good) for name, good in GOOD.items() if name != "key"})
 COMMAND_BODIES = NAMED_COMMANDS | st.fixed_dictionaries(
     {"command": JSON}, optional={name: good | JSON for name, good in GOOD.items()}) | JSON
 
@@ -291,7 +297,7 @@ def test_any_request_to_any_route_gets_a_json_answer(server, quiet, request):
 
 
 @FUZZ
-@given(body=st.one_of(*[NAMED_COMMANDS.map(lambda b: json.dumps(b).encode())] * 2, RAW_BODIES),
+@given(body=often(NAMED_COMMANDS.map(lambda b: json.dumps(b).encode()), RAW_BODIES, 2),
        fresh=st.booleans())
 def test_any_command_body_gets_an_answer_and_no_crash(server, quiet, body, fresh):
     """Well-addressed commands (the page's headers, the token) with any body at all."""
