@@ -10,6 +10,11 @@ the node's name (`sim_bridge`, `/sim_bridge`, `/**/sim_bridge`, `/ns/sim_bridge`
 section addressed to this node, and every `-p` name, must be declared by it. Names under `/**`
 are shared by a whole graph (the run scripts give every node one file), so a node cannot tell a
 typo there from another node's parameter: the launcher checks those against the whole graph.
+
+Every parameter file is read here, by the nodes and by the launcher alike (`read_parameter_file`,
+and `parse_yaml` for a sweep file or a `--param` value): UTF-8 YAML, where a key given twice
+in one mapping is refused (PyYAML and rcl would silently keep the last) and so is an alias
+(rcl refuses them). Each problem is one line naming the file, the line and the key.
 """
 
 from __future__ import annotations
@@ -49,25 +54,112 @@ def ros_arguments(argv: Sequence[str]) -> tuple[list[str], list[str]]:
     return assignments, files
 
 
-def flatten(parameters: dict[str, Any], prefix: str = "") -> Iterator[str]:
-    """Parameter names of a `ros__parameters` mapping (nested mappings join with '.')."""
+def flat_items(parameters: dict[str, Any], prefix: str = "") -> Iterator[tuple[str, Any]]:
+    """(name, value) of a `ros__parameters` mapping, nested mappings joined with '.'."""
     for key, value in parameters.items():
         name = f"{prefix}{key}"
         if isinstance(value, dict):
-            yield from flatten(value, f"{name}.")
+            yield from flat_items(value, f"{name}.")
         else:
-            yield name
+            yield name, value
+
+
+def flatten(parameters: dict[str, Any], prefix: str = "") -> Iterator[str]:
+    """Parameter names of a `ros__parameters` mapping (nested mappings join with '.')."""
+    for name, _value in flat_items(parameters, prefix):
+        yield name
+
+
+def shown(text: object) -> str:
+    """A path or an argument in a message, kept on one line (repr if it holds a newline or
+    another character that does not print)."""
+    text = str(text)
+    return text if text.isprintable() else repr(text)
+
+
+class YamlProblem(ValueError):
+    """Why a text is not YAML that a parameter file (or a value) may hold; one line."""
+
+
+class StrictLoader(yaml.SafeLoader):
+    """PyYAML's safe loader, refusing what rcl reads otherwise or not at all: a key given
+    twice in one mapping (both keep the last without a word) and an alias (rcl refuses it)."""
+
+    def compose_node(self, parent, index):
+        if self.check_event(yaml.AliasEvent):
+            event = self.peek_event()
+            raise YamlProblem(f"line {event.start_mark.line + 1}: an alias (*{event.anchor}): "
+                              "ROS does not read aliases")
+        return super().compose_node(parent, index)
+
+    def construct_mapping(self, node, deep=False):
+        if isinstance(node, yaml.MappingNode):
+            self.flatten_mapping(node)
+            seen: dict[Any, int] = {}
+            for key_node, _value in node.value:
+                key = self.construct_object(key_node, deep=True)
+                line = key_node.start_mark.line + 1
+                try:
+                    first = seen.get(key)
+                except TypeError:
+                    continue  # an unhashable key: the base class refuses it
+                if first is not None:
+                    raise YamlProblem(f"line {line}: key {_key(key)} given twice (first at "
+                                      f"line {first}); ROS would silently keep the last")
+                seen[key] = line
+        return super().construct_mapping(node, deep)
+
+
+def _key(key: Any) -> str:
+    text = repr(key)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def parse_yaml(text: str | bytes) -> Any:
+    """The YAML document `text` (bytes: must be UTF-8), or YamlProblem saying why not."""
+    if isinstance(text, bytes):
+        try:
+            text = text.decode("utf-8")
+        except UnicodeDecodeError as error:
+            line = text[:error.start].count(b"\n") + 1
+            raise YamlProblem(f"not UTF-8 text (byte 0x{text[error.start]:02x} at line "
+                              f"{line}): it must be a YAML text file") from None
+    try:
+        return yaml.load(text, Loader=StrictLoader)  # a SafeLoader: no Python objects
+    except yaml.MarkedYAMLError as error:
+        mark = error.problem_mark or error.context_mark
+        where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark else ""
+        problem = error.problem or error.context or "unreadable"
+        raise YamlProblem(f"not valid YAML: {problem}{where}") from None
+    except yaml.YAMLError as error:
+        raise YamlProblem(f"not valid YAML: {str(error).splitlines()[0]}") from None
+    except RecursionError:
+        raise YamlProblem("not valid YAML: nested too deeply") from None
+    except YamlProblem:
+        raise
+    except (ValueError, OverflowError) as error:  # a date that does not exist: 2020-13-45
+        raise YamlProblem(f"not valid YAML: {error}") from None
+
+
+def read_yaml_file(path: str | Path, what: str = "parameter file") -> Any:
+    """The YAML document of a file, or ParameterError: one line naming `what`, the file and,
+    where there is one, the line."""
+    try:
+        data = Path(path).read_bytes()
+    except OSError as error:
+        raise ParameterError(f"{what} {shown(path)}: {error.strerror or error}") from None
+    except ValueError as error:  # a NUL character in the path
+        raise ParameterError(f"{what} {shown(path)}: not a usable path ({error})") from None
+    try:
+        return parse_yaml(data)
+    except YamlProblem as problem:
+        raise ParameterError(f"{what} {shown(path)}: {problem}") from None
 
 
 def read_parameter_file(path: str | Path) -> dict[str, dict[str, Any]]:
     """Section name -> its `ros__parameters`, or ParameterError saying what is wrong."""
-    try:
-        data = yaml.safe_load(Path(path).read_text())
-    except OSError as error:
-        raise ParameterError(f"parameter file {path}: {error.strerror}") from None
-    except yaml.YAMLError as error:
-        raise ParameterError(f"parameter file {path} is not valid YAML: "
-                             f"{str(error).splitlines()[0]}") from None
+    data = read_yaml_file(path)
+    path = shown(path)
     shape = ("must map node names (or /**) to {ros__parameters: {name: value, ...}}")
     if not isinstance(data, dict):
         raise ParameterError(f"parameter file {path} {shape}; it holds a "
@@ -80,6 +172,12 @@ def read_parameter_file(path: str | Path) -> dict[str, dict[str, Any]]:
         if extra:
             raise ParameterError(f"parameter file {path}: section {section!r} holds "
                                  f"{', '.join(extra)} beside ros__parameters")
+        seen: set[str] = set()
+        for name in flatten(body["ros__parameters"]):
+            if name in seen:  # {a.b: 1, a: {b: 2}}: two spellings of one name
+                raise ParameterError(f"parameter file {path}: section {section!r} gives "
+                                     f"parameter {name!r} twice")
+            seen.add(name)
         sections[str(section)] = body["ros__parameters"]
     return sections
 

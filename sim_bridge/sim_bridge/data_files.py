@@ -18,6 +18,7 @@ default pond's, the physics being the same).
 from __future__ import annotations
 
 import os
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -29,7 +30,7 @@ from sim_bridge.lake import ISOLATED_REGION, Lake, in_isolated_region, isolated_
 __all__ = ["ISOLATED_REGION", "Floor", "Lake", "ReachableMap", "TeachingSet", "data_dir",
            "in_isolated_region", "isolated_region",
            "load_benchmark_goals", "load_floor", "load_reachable_casts", "load_reachable_map",
-           "load_teaching_set"]
+           "load_teaching_set", "teaching_set_problem"]
 
 REACHABLE_MAP = "reachable_map.npz"
 BENCHMARK_GOALS = "benchmark_goals.npz"
@@ -112,6 +113,51 @@ def load_teaching_set(path: str | os.PathLike[str] | None = None) -> TeachingSet
     """The teacher's demonstrations."""
     with np.load(_path(TEACHING_SET, path)) as f:
         return TeachingSet(actions=f["actions"], outcomes=f["outcomes"], spread=f["spread"])
+
+
+TEACHING_SET_FORMAT = (f"a teaching set (.npz: actions (M, {scaling.ACTION_DIM}) and outcomes "
+                       f"(M, {scaling.OUTCOME_DIM}) in [-1, 1], spread (M,))")
+
+
+def teaching_set_problem(path: str | os.PathLike[str],
+                         action_size: int = scaling.ACTION_DIM,
+                         outcome_size: int = scaling.OUTCOME_DIM) -> str | None:
+    """Why a file the user names is not a teaching set of this world, or None.
+
+    The nodes' `teaching_set` parameter is checked with it before any node starts
+    (sgim_ros.params.DataFile): any other file (a text file, another world's set, a set
+    with NaN) would otherwise stop the teacher, or the run, at its first movement.
+    """
+    try:
+        with open(path, "rb") as head:
+            if head.read(4) != b"PK\x03\x04":
+                return "not an .npz archive (a zip of .npy arrays, as numpy.savez writes)"
+        with np.load(path, allow_pickle=False) as f:
+            missing = [k for k in ("actions", "outcomes", "spread") if k not in f.files]
+            if missing:
+                return f"it has no {', '.join(missing)} array (it holds {', '.join(f.files)})"
+            actions, outcomes, spread = f["actions"], f["outcomes"], f["spread"]
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as error:
+        return f"not an .npz archive numpy reads ({str(error).splitlines()[0][:120]})"
+    arrays = {"actions": actions, "outcomes": outcomes, "spread": spread}
+    for name, array in arrays.items():
+        if not np.issubdtype(array.dtype, np.number) or np.issubdtype(array.dtype,
+                                                                       np.complexfloating):
+            return f"{name} holds {array.dtype}, not real numbers"
+    m = len(actions) if actions.ndim else 0
+    if m < 1 or actions.shape != (m, action_size):
+        return f"actions has shape {actions.shape}, expected (M >= 1, {action_size})"
+    if outcomes.shape != (m, outcome_size):
+        return f"outcomes has shape {outcomes.shape}, expected ({m}, {outcome_size})"
+    if spread.shape != (m,):
+        return f"spread has shape {spread.shape}, expected ({m},)"
+    for name, array in arrays.items():
+        if not np.all(np.isfinite(array)):
+            return f"{name} holds NaN or infinite numbers"
+    for name in ("actions", "outcomes"):
+        if np.any(np.abs(arrays[name]) > 1.0):
+            return f"{name} has numbers outside [-1, 1]"
+    return None
 
 
 @dataclass(frozen=True)

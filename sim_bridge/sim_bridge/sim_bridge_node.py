@@ -22,11 +22,11 @@ from sgim_msgs.msg import Movement
 from sgim_msgs.srv import ExecuteAction
 from sgim_ros import qos
 from sgim_ros.entry import run_node
-from sgim_ros.params import Bounds, Param, at_least, declare, non_negative
+from sgim_ros.params import Bounds, Param, declare, non_negative, seed_range
 from sim_bridge.fishing_world import DEFAULT_NOISE, DEFAULT_TIME_STEP, FishingWorld
 
 PARAMS = (  # all read-only: they are the run's physics, recorded in its metadata
-    Param("seed", 0, "seed of the motor-command noise; same seed, same outcomes", at_least(0)),
+    Param("seed", 0, "seed of the motor-command noise; same seed, same outcomes", seed_range),
     Param("noise", DEFAULT_NOISE, "std of the noise added to the motor commands",
           non_negative),
     Param("time_step", DEFAULT_TIME_STEP, "physics time step in seconds",

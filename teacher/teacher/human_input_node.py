@@ -54,6 +54,7 @@ from sgim_ros import qos
 from sgim_ros.params import Param, ParameterError, declare, positive
 from sgim_ros.ready import serve_ready
 from sim_bridge.data_files import load_teaching_set
+from sim_bridge.data_params import TEACHING_SET_FILE
 from teacher.human_commands import (
     OUTCOME_SIZE,
     CommandError,
@@ -78,7 +79,8 @@ from teacher.prompt_loop import PipeLines, run, setup_readline
 PARAMS = (
     *REACH_PARAMS,
     Param("teaching_set", "",
-          "path of a teaching-set .npz (actions, outcomes, spread); empty: the packaged set"),
+          "path of a teaching-set .npz (actions, outcomes, spread); empty: the packaged set",
+          TEACHING_SET_FILE),
     Param("execute_timeout", 30.0,
           "seconds to wait for execute_action to measure the outcome of a YAML action",
           positive, "> 0"),

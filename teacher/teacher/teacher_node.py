@@ -79,6 +79,7 @@ from sgim_ros import qos
 from sgim_ros.params import Param, ParameterError, at_least, non_negative, one_of
 from sgim_ros.ready import serve_ready
 from sim_bridge.data_files import load_teaching_set
+from sim_bridge.data_params import TEACHING_SET_FILE
 from sim_bridge.fishing_world import DEFAULT_NOISE, FishingWorld
 
 AUTOMATIC = "automatic"  # Demonstration.source of this node's demonstrations
@@ -104,7 +105,8 @@ PARAMS = learner_node_params(
           "within this many units of the world's outcome noise", non_negative),
     Param("noise", DEFAULT_NOISE, "motor-command noise of the teacher's own world (the "
           "'ability' rule casts there)", non_negative),
-    Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one"),
+    Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one",
+          TEACHING_SET_FILE),
     Param("movements", 0, "the run's movement budget, to validate run statuses (0: unknown)",
           non_negative),
 )

@@ -59,6 +59,7 @@ from sgim_ros.params import Param, ParameterError, declare, non_negative, positi
 from sgim_ros.ready import serve_ready
 from sim_bridge import scaling
 from sim_bridge.data_files import load_teaching_set
+from sim_bridge.data_params import TEACHING_SET_FILE
 from sim_bridge.lake import is_water
 from teacher.human_commands import CommandError, PaceRequest
 from teacher.human_decisions import (
@@ -81,7 +82,8 @@ PARAMS = (
     Param("address_file", "", "file to write the page's address into once it serves (for "
           "launchers and tests); empty: none"),
     *REACH_PARAMS,
-    Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one"),
+    Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one",
+          TEACHING_SET_FILE),
     Param("execute_timeout", 30.0, "seconds to wait for execute_action to measure a pasted "
           "action", positive, "> 0"),
     Param("render_casts", True, "draw the latest demonstration's cast as a GIF for the page "

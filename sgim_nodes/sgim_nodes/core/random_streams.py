@@ -12,6 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+SEED_MAX = 2**32 - 1
+"""The largest seed of a run. numpy would take any integer >= 0, but the node graph carries the
+seed in a uint32 (RunStatus.seed); one range everywhere keeps a seed that `learn` takes one the
+graph takes too (sgim_ros.params.SEED_MAX is the same number, for the nodes and the launcher)."""
 STREAM_NAMES = ("goals", "explorer", "imitation", "random", "teacher", "teacher-world")
 """Appending a name keeps every earlier stream: child i of a SeedSequence does not depend on
 how many children are spawned."""
@@ -21,8 +25,8 @@ def component_rng(seed: int, name: str) -> np.random.Generator:
     """The generator of component `name` for run `seed` (same in every process)."""
     if name not in STREAM_NAMES:
         raise ValueError(f"unknown random stream {name!r}; known: {STREAM_NAMES}")
-    if seed < 0:
-        raise ValueError(f"seed must be >= 0, got {seed}")
+    if not 0 <= seed <= SEED_MAX:
+        raise ValueError(f"seed must be in 0..{SEED_MAX}, got {seed}")
     children = np.random.SeedSequence(seed).spawn(len(STREAM_NAMES))
     return np.random.default_rng(children[STREAM_NAMES.index(name)])
 

@@ -37,7 +37,7 @@ from .help_request import (
 )
 from .learners import LEARNER_NAMES, Learner, make_learner
 from .planar_arm import ARMS, PlanarArm, benchmark_goals, teaching_set
-from .random_streams import component_rng, world_seed
+from .random_streams import SEED_MAX, component_rng, world_seed
 from .scale import WorldScale, unit_box
 from .teaching import (
     ABILITY,
@@ -304,6 +304,9 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     args = p.parse_args(argv)
     if args.movements < 0:
         p.error("--movements must be >= 0")
+    if not 0 <= args.seed <= SEED_MAX:
+        p.error(f"--seed must be in 0..{SEED_MAX} (2**32 - 1): the graph's range, so that "
+                "a seed of `learn` is one a graph run takes too")
     if args.eval_every < 0:
         p.error("--eval-every must be >= 0")
     if args.teacher_tolerance_noise < 0:

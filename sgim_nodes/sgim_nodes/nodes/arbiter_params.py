@@ -10,6 +10,7 @@ from sgim_nodes.nodes.pace import FOREVER
 from sgim_nodes.nodes.ros_glue import learner_node_params
 from sgim_nodes.nodes.sim_client import SIM_CLIENT_PARAMS
 from sgim_ros.params import Param, at_least, non_negative, one_of, positive
+from sim_bridge.data_params import TEACHING_SET_FILE
 
 SOCIAL = ("sgim-d", "demo-only")
 PARAMS = learner_node_params(
@@ -45,5 +46,5 @@ PARAMS = learner_node_params(
     *SIM_CLIENT_PARAMS,
     Param("settle_time", 2.0, "seconds of discovery settling before the start", non_negative),
     Param("teaching_set", "", "the teacher's teaching-set file (empty: the packaged one), to "
-          "validate demonstrations' teaching-set indices"),
+          "validate demonstrations' teaching-set indices", TEACHING_SET_FILE),
 )

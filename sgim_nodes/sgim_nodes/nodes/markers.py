@@ -28,6 +28,7 @@ from sgim_ros import qos
 from sgim_ros.entry import run_node
 from sgim_ros.params import Param, declare, positive
 from sim_bridge.data_files import load_teaching_set
+from sim_bridge.data_params import TEACHING_SET_FILE
 
 PARAMS = (
     Param("rate", 2.0, "publications per second at most (the picture changes faster)",
@@ -35,7 +36,8 @@ PARAMS = (
     Param("full_every", 5.0, "seconds between full landings refreshes (between them only new "
           "landings are sent)", positive, "> 0"),
     *REACH_PARAMS,
-    Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one"),
+    Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one",
+          TEACHING_SET_FILE),
 )
 
 

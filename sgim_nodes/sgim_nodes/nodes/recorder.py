@@ -52,6 +52,7 @@ from sgim_ros import qos
 from sgim_ros.entry import run_node
 from sgim_ros.params import Param, at_least, declare, non_negative, one_of, positive
 from sgim_ros.ready import serve_ready
+from sim_bridge.data_params import TEACHING_SET_FILE
 
 FINISH_LIMIT = 30.0  # seconds after the final status at which the recorder stops regardless
 WRITE_FAILED = 3  # exit code: the bag could not be written (the launcher fails the run)
@@ -76,7 +77,7 @@ PARAMS = (
     Param("action_size", 24, "numbers per action", at_least(1)),
     Param("outcome_size", 2, "numbers per outcome", at_least(1)),
     Param("teaching_set", "", "the teacher's teaching-set file (empty: the packaged one), to "
-          "validate teaching-set indices"),
+          "validate teaching-set indices", TEACHING_SET_FILE),
     # A resumed run's segment continues the run's counts: its first movement is the one after
     # the resume point, not movement 1 (the launcher gives every node the same two values).
     Param("resume_from", "", "run folder being resumed: the movement and goal counts of its "

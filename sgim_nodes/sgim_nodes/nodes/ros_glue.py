@@ -22,7 +22,16 @@ from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
 from sgim_nodes.core.region_tree import SPLIT_QUALITIES
 from sgim_nodes.core.scale import WorldScale, unit_box
 from sgim_ros.entry import AsyncNode, run_node  # noqa: F401 - the nodes' shared entry point
-from sgim_ros.params import Param, ParameterError, at_least, between, declare, one_of, positive
+from sgim_ros.params import (
+    Param,
+    ParameterError,
+    at_least,
+    between,
+    declare,
+    one_of,
+    positive,
+    seed_range,
+)
 from sim_bridge.scaling import OUTCOME_NOISE
 
 ACTION_SIZE = 24  # the fishing world's; a parameter of every node that checks sizes
@@ -96,7 +105,7 @@ def check_vector(values: Sequence[float], size: int, what: str, bound: float = 1
 COMMON_PARAMS = (
     Param("learner", "sgim-d", "which learner the graph runs", one_of(*LEARNER_NAMES)),
     Param("seed", 0, "seed of the run; each node derives its own random stream from it",
-          at_least(0)),
+          seed_range),
     Param("action_size", ACTION_SIZE, "numbers per action (the world's action size)",
           at_least(1)),
     Param("outcome_size", OUTCOME_SIZE, "numbers per outcome (the world's outcome size)",
