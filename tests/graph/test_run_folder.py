@@ -57,12 +57,16 @@ def test_metadata_without_learner_is_refused_with_what_to_fix(tmp_path):
 
 @pytest.mark.parametrize(("text", "expected"), [
     ("learner: sgimd\nseed: 1\nmovements: 5", "'learner' must be one of"),
-    ("learner: random\nseed: -1\nmovements: 5", "'seed' must be an integer >= 0"),
+    ("learner: random\nseed: -1\nmovements: 5", r"'seed' must be an integer in 0\.\.4294967295"),
+    ("learner: random\nseed: 4294967296\nmovements: 5", "'seed' must be an integer in 0"),
+    ("learner: random\nseed: 1\nseed: 2\nmovements: 5", "line 3: key 'seed' given twice"),
+    (b"learner: random\nseed: \xff\n", r"not UTF-8 text \(byte 0xff at line 2\)"),
     ("just a string", "must be a mapping"),
     ("learner: [unclosed", "not valid YAML"),
 ])
 def test_bad_metadata_is_named(tmp_path, text, expected):
-    (tmp_path / "metadata.yaml").write_text(text)
+    path = tmp_path / "metadata.yaml"
+    path.write_bytes(text) if isinstance(text, bytes) else path.write_text(text)
     with pytest.raises(RunFolderError, match=expected):
         read_metadata(tmp_path)
 

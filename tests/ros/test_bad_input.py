@@ -116,3 +116,36 @@ def test_a_job_that_does_not_start_at_the_runs_count_is_refused(ros_processes, c
         GoalStatus.STATUS_ABORTED
     assert status_of(ReachGoal, "/reach_goal", ReachGoal.Goal(
         max_movements=5, movements_before=3)) == GoalStatus.STATUS_ABORTED
+
+
+@pytest.mark.parametrize(("node", "setting", "content", "message"), [
+    ("imitation", "imitation_epsilon:=.inf", None, "'imitation_epsilon' = inf is invalid"),
+    ("recorder", None, "/**:\n  ros__parameters:\n    teaching_set: /etc/passwd\n",
+     "'teaching_set' = '/etc/passwd' is invalid: not a teaching set"),
+    ("recorder", None, "/**:\n  ros__parameters:\n    chunk_messages: 9\n    chunk_messages: 1\n",
+     "line 4: key 'chunk_messages' given twice (first at line 3)"),
+    ("recorder", None, b"/**:\n  ros__parameters:\n    storage: \xff\xfe\n",
+     "not UTF-8 text (byte 0xff at line 3)"),
+])
+def test_a_node_refuses_what_the_launcher_refuses_in_one_line(ros_processes, tmp_path, node,
+                                                              setting, content, message):
+    """The nodes share the launcher's checks (sgim_ros.params, sgim_ros.command_line): given
+    the same value or file directly (`ros2 run`), a node stops at once with exit code 2 and
+    the same line."""
+    argv = [ROS2RUN, "sgim_nodes", node, "--ros-args"]
+    if node == "recorder":
+        argv += ["-p", f"output:={tmp_path / 'bag'}"]
+    if setting:
+        argv += ["-p", setting]
+    if content is not None:
+        path = tmp_path / "params.yaml"
+        path.write_bytes(content if isinstance(content, bytes) else content.encode())
+        argv += ["--params-file", str(path)]
+    child = ros_processes.start(f"{node}-refuses", argv, stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, text=True)
+    try:
+        output, _ = child.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"{node} started with {setting or content!r} instead of refusing it")
+    assert child.returncode == 2 and message in output, output
+    assert "Traceback" not in output

@@ -17,6 +17,7 @@ names carry their settings).
 from __future__ import annotations
 
 import argparse
+import math
 import re
 import shutil
 import signal
@@ -34,7 +35,7 @@ from sgim_nodes.graph.description import RunOptions, parameters
 from sgim_nodes.graph.overrides import parse_assignments
 from sgim_nodes.graph.processes import ProcessGroup
 from sgim_nodes.graph.run_folder import RunFolderError, RunLock
-from sgim_ros.params import ParameterError
+from sgim_ros.params import SEED_MAX, ParameterError
 
 REPO = Path(__file__).resolve().parents[3]
 RUN = REPO / "ros_ws" / "run_experiment.sh"
@@ -99,6 +100,10 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     args = p.parse_args(argv)
     if args.seeds < 1 or args.parallel < 1 or args.movements < 1:
         p.error("--seeds, --parallel and --movements must be >= 1")
+    if args.first_seed < 0 or args.seeds - 1 > SEED_MAX:
+        p.error(f"the seeds must lie in 0..{SEED_MAX} (2**32 - 1), the graph's range")
+    if not (args.run_timeout > 0 and math.isfinite(args.run_timeout)):
+        p.error("--run-timeout must be a number of seconds > 0")
     try:
         check_params(args.learners, args.param, args.movements, args.eval_every)
     except ParameterError as error:

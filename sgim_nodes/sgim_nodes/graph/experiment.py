@@ -63,9 +63,11 @@ from sgim_nodes.graph.run_folder import (
     RunLock,
     check_resume,
     read_metadata,
+    run_name_problem,
     write_metadata,
 )
 from sgim_nodes.graph.supervise import Interrupted, RunFailed, say
+from sgim_ros.command_line import shown
 from sgim_ros.params import ParameterError
 
 ROS2RUN = REPO / "ros_ws" / "ros2run.sh"
@@ -97,7 +99,10 @@ def prefixes(items: Sequence[str], nodes: Sequence[NodeSpec]) -> dict[str, list[
         if name not in names:
             raise ParameterError(f"--prefix {item!r}: no node '{name}' in this run (its "
                                  f"nodes: {', '.join(sorted(names))})")
-        found[name] = shlex.split(command)
+        try:
+            found[name] = shlex.split(command)
+        except ValueError as error:  # an unclosed quote
+            raise ParameterError(f"--prefix {item!r}: {error}") from None
     return found
 
 
@@ -120,7 +125,10 @@ def plan_new(args: argparse.Namespace) -> Plan:
     files_shared, files_per_node, where = read_parameter_files(args.params_file)
     assigned, assigned_where = parse_assignments(args.param)
     stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
-    run_dir = args.runs_dir / (args.name or f"{args.learner}-seed{args.seed}-{stamp}")
+    name = args.name or f"{args.learner}-seed{args.seed}-{stamp}"
+    if run_name_problem(name):  # parse_args refuses it; a caller's own Namespace too
+        raise RunFolderError(f"run name {name!r}: {run_name_problem(name)}")
+    run_dir = args.runs_dir / name
     options = RunOptions(args.learner, args.seed, args.movements, args.eval_every, args.period,
                          args.teacher, str(run_dir / "bag"), args.storage,
                          {**files_shared, **assigned}, markers=not args.no_markers,
@@ -138,6 +146,9 @@ def plan_new(args: argparse.Namespace) -> Plan:
     except FileExistsError:
         raise RunFolderError(f"{run_dir} exists; choose another --name, or --resume it") \
             from None
+    except (OSError, ValueError) as error:  # a --runs-dir that is a file, read-only, ...
+        raise RunFolderError(f"cannot make the run folder {shown(run_dir)}: "
+                             f"{getattr(error, 'strerror', None) or error}") from None
     lock = RunLock.take(run_dir)
     meta = {
         "learner": args.learner, "seed": args.seed, "movements": args.movements,
@@ -164,7 +175,8 @@ def plan_resume(args: argparse.Namespace) -> Plan | None:
     try:
         try:
             values = RunParameters.from_yaml(yaml.safe_load((run_dir / PARAMS).read_text()))
-        except (OSError, yaml.YAMLError, KeyError, TypeError, AttributeError) as error:
+        except (OSError, yaml.YAMLError, KeyError, TypeError, AttributeError,
+                ValueError) as error:  # ValueError: not UTF-8
             raise RunFolderError(f"cannot resume {run_dir}: its {PARAMS} is missing or is not "
                                  f"a parameter file written by run_experiment ({error})") \
                 from None

@@ -14,6 +14,9 @@ from pathlib import Path
 
 from sgim_nodes.core.learners import LEARNER_NAMES
 from sgim_nodes.graph.description import STORAGES, TEACHERS
+from sgim_nodes.graph.run_folder import run_name_problem
+from sgim_ros.command_line import shown
+from sgim_ros.params import SEED_MAX, seed_problem
 
 REPO = Path(__file__).resolve().parents[3]
 DEFAULTS = {"seed": 0, "movements": 5000, "eval_every": 250, "period": 150,
@@ -59,8 +62,16 @@ def wait_seconds(text: str) -> float:
     return value
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse, whose refusal quotes the argument as given: a newline or a carriage return
+    in it would split the one line that says what was refused."""
+
+    def error(self, message: str):
+        super().error("".join(c if c.isprintable() else repr(c)[1:-1] for c in message))
+
+
 def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(
+    p = OneLineParser(
         prog="ros_ws/run_experiment.sh",
         description="Run one learner through the ROS 2 node graph and record the run to a bag "
                     "in runs/. Example: ros_ws/run_experiment.sh sgim-d --seed 3 "
@@ -143,8 +154,13 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     for name in ("movements", "period"):
         if getattr(args, name) < 1:
             p.error(f"--{name} must be >= 1")
-    if args.seed < 0 or args.eval_every < 0:
-        p.error("--seed and --eval-every must be >= 0")
+    if seed_problem(args.seed):
+        p.error(f"--seed must be in 0..{SEED_MAX} (2**32 - 1): the graph carries it in a "
+                "uint32")
+    if args.eval_every < 0:
+        p.error("--eval-every must be >= 0")
+    if args.name is not None and run_name_problem(args.name):
+        p.error(f"--name {shown(args.name)}: {run_name_problem(args.name)}")
     if args.timeout is not None and not (args.timeout > 0 and math.isfinite(args.timeout)):
         p.error(f"--timeout must be a number of seconds > 0, got {args.timeout:g}")
     if args.domain is not None and not 0 <= args.domain <= 232:

@@ -22,6 +22,8 @@ from typing import Any
 import yaml
 
 from sgim_nodes.core.learners import LEARNER_NAMES
+from sgim_ros.command_line import YamlProblem, parse_yaml
+from sgim_ros.params import SEED_MAX, seed_problem
 
 LOCK_NAME = ".lock"
 METADATA = "metadata.yaml"
@@ -29,8 +31,28 @@ PARAMS = "params.yaml"
 RUNNING = "running"  # the outcome while a launcher works; left as is if the launcher is killed
 
 
+NAME_MAX = 255  # bytes of one path component (Linux, most file systems)
+
+
 class RunFolderError(Exception):
     """The run folder cannot be used as asked; the message says why and what to do."""
+
+
+def run_name_problem(name: str) -> str | None:
+    """Why `name` cannot be a run folder's name inside the runs directory, or None.
+
+    A name is one path component: with a '/' or as '..' it would put the run (and whatever
+    the launcher writes there) outside --runs-dir; a NUL or a character that does not print
+    would break the one-line messages that name the folder."""
+    if not name or name in (".", ".."):
+        return "a run's name must be a folder name, not empty, '.' or '..'"
+    if "/" in name:
+        return "a run's name is one folder inside --runs-dir: no '/'"
+    if not name.isprintable():
+        return "a run's name holds printable characters only (no NUL, newline or tab)"
+    if len(name.encode("utf-8", "surrogateescape")) > NAME_MAX:
+        return f"a run's name has at most {NAME_MAX} bytes"
+    return None
 
 
 @dataclass
@@ -75,12 +97,12 @@ def read_metadata(run_dir: Path) -> dict[str, Any]:
     if not run_dir.is_dir():
         raise RunFolderError(f"{run_dir} is not a folder")
     try:
-        meta = yaml.safe_load(path.read_text())
+        meta = parse_yaml(path.read_bytes())
     except OSError as error:
         raise RunFolderError(f"{run_dir} is not a run folder: cannot read {METADATA} "
                              f"({error.strerror})") from None
-    except yaml.YAMLError as error:
-        raise RunFolderError(f"{path} is not valid YAML: {str(error).splitlines()[0]}") from None
+    except YamlProblem as problem:  # binary, not YAML, a key twice: one line, no traceback
+        raise RunFolderError(f"{path}: {problem}") from None
     if not isinstance(meta, dict):
         raise RunFolderError(f"{path} must be a mapping (learner: ..., seed: ..., "
                              f"movements: ...), it holds a {type(meta).__name__}")
@@ -88,15 +110,14 @@ def read_metadata(run_dir: Path) -> dict[str, Any]:
     hint = _params_hint(run_dir)
     for key, valid, what in (
             ("learner", lambda v: v in LEARNER_NAMES, f"one of {', '.join(LEARNER_NAMES)}"),
-            ("seed", lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= 0,
-             "an integer >= 0"),
+            ("seed", lambda v: seed_problem(v) is None, f"an integer in 0..{SEED_MAX}"),
             ("movements", lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= 1,
              "an integer >= 1")):
         if key not in meta:
             problems.append(f"has no '{key}' ({what})"
                             + (f"; {PARAMS} says {key}: {hint[key]}" if key in hint else ""))
         elif not valid(meta[key]):
-            problems.append(f"'{key}' must be {what}, got {meta[key]!r}")
+            problems.append(f"'{key}' must be {what}, got {repr(meta[key])[:60]}")
     if problems:
         raise RunFolderError(f"cannot resume {run_dir}: {path.name} " + "; ".join(problems)
                              + f". Fix {path} and resume again.")

@@ -53,8 +53,10 @@ from sgim_nodes.graph.description import (
     unused,
 )
 from sgim_nodes.graph.experiment_options import REPO
+from sgim_nodes.graph.run_folder import run_name_problem
 from sgim_nodes.provenance.fingerprint import Fingerprint
-from sgim_ros.params import ParameterError
+from sgim_ros.command_line import YamlProblem, parse_yaml, shown
+from sgim_ros.params import SEED_MAX, ParameterError, seed_problem
 
 # Settings of one run: the file's keys (param: -> run_experiment --param NAME=VALUE).
 SETTINGS = ("learner", "period", "movements", "eval_every", "teacher", "storage", "seeds",
@@ -68,6 +70,7 @@ SETTING_OF_PARAM = {"learner": "learner", "seed": "seeds", "movements": "movemen
 # run_experiment's own defaults.
 DEFAULTS = {key: experiment_options.DEFAULTS[key]
             for key in ("period", "movements", "eval_every", "teacher", "storage")}
+MAX_SEEDS = 100_000  # of one block: a sweep of more runs than that is a typo, not a plan
 _UNSAFE = re.compile(r"[^A-Za-z0-9._+=,-]+")
 
 
@@ -201,6 +204,7 @@ def _seeds(value: Any, where: str) -> list[int]:
     if isinstance(value, bool):
         raise SweepFileError(f"{where}: seeds must be a count, a list or {{first, count}}")
     if isinstance(value, int):
+        _seed_count(value, 0, where)
         seeds = list(range(value))
     elif isinstance(value, list):
         seeds = value
@@ -208,13 +212,30 @@ def _seeds(value: Any, where: str) -> list[int]:
         first, count = value.get("first", 0), value["count"]
         if not all(isinstance(v, int) and not isinstance(v, bool) for v in (first, count)):
             raise SweepFileError(f"{where}: seeds' first and count must be integers")
+        _seed_count(count, first, where)
         seeds = list(range(first, first + count))
     else:
         raise SweepFileError(f"{where}: seeds must be a count (N: 0..N-1), a list of seeds or "
                              f"{{first: F, count: N}}, got {value!r}")
     if not seeds or any(not isinstance(s, int) or isinstance(s, bool) or s < 0 for s in seeds):
-        raise SweepFileError(f"{where}: seeds must be integers >= 0, at least one, got {value!r}")
+        raise SweepFileError(f"{where}: seeds must be integers >= 0, at least one, got "
+                             f"{_short(value)}")
+    if any(seed_problem(s) for s in seeds):
+        raise SweepFileError(f"{where}: seeds must be in 0..{SEED_MAX} (2**32 - 1), the "
+                             f"graph's range, got {_short(value)}")
     return seeds
+
+
+def _seed_count(count: int, first: int, where: str) -> None:
+    """Refuse a count of seeds before it is spelt out as a list (10**12 would never end)."""
+    if count > MAX_SEEDS or (count > 0 and first + count - 1 > SEED_MAX):
+        raise SweepFileError(f"{where}: seeds must be in 0..{SEED_MAX} (2**32 - 1) and at most "
+                             f"{MAX_SEEDS} of them, got {count} from {first}")
+
+
+def _short(value: Any, limit: int = 80) -> str:
+    text = repr(value) if not isinstance(value, int) or abs(value) < 10**40 else "a huge number"
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 def _positive_int(value: Any, key: str, where: str, minimum: int = 1) -> int:
@@ -309,7 +330,11 @@ def _expand_block(block: dict[str, Any], where: str) -> Iterable[RunSpec]:
                       and (n not in defaults or checked_params([(n, t)])[n] != defaults[n]))
         spec = RunSpec(learner, seed, movements, eval_every, period if social else None,
                        teacher if social else None, storage, given)
-        yield RunSpec(**{**spec.__dict__, "name": run_name(spec)})
+        name = run_name(spec)
+        if run_name_problem(name):  # a folder name the file system refuses: too long
+            raise SweepFileError(f"{where}: the run folder {name[:60]}...: "
+                                 f"{run_name_problem(name)}")
+        yield RunSpec(**{**spec.__dict__, "name": name})
 
 
 def expand(document: Mapping[str, Any], where: str = "sweep file") -> list[RunSpec]:
@@ -351,11 +376,14 @@ def load(path: str | Path, runs_dir: Path | None = None) -> Sweep:
     """Read and expand a sweep file; `runs_dir` (the command line's) wins over the file's."""
     path = Path(path)
     try:
-        document = yaml.safe_load(path.read_text())
-    except OSError as error:
-        raise SweepFileError(f"cannot read the sweep file {path}: {error.strerror}") from None
-    except yaml.YAMLError as error:
-        raise SweepFileError(f"{path}: not valid YAML: {error}") from None
+        raw = path.read_bytes()
+    except (OSError, ValueError) as error:  # ValueError: a NUL in the path
+        raise SweepFileError(f"cannot read the sweep file {shown(path)}: "
+                             f"{getattr(error, 'strerror', None) or error}") from None
+    try:  # as a parameter file is read: UTF-8, a key given twice refused (not last-wins)
+        document = parse_yaml(raw)
+    except YamlProblem as problem:
+        raise SweepFileError(f"{shown(path)}: {problem}") from None
     runs = expand(document, str(path))
     name = str(document.get("name", path.stem))
     if runs_dir is None:
