@@ -118,6 +118,32 @@ def test_a_job_that_does_not_start_at_the_runs_count_is_refused(ros_processes, c
         max_movements=5, movements_before=3)) == GoalStatus.STATUS_ABORTED
 
 
+def test_a_non_finite_demonstrated_outcome_is_refused_once_the_memory_has_a_tree(
+        ros_processes, client):
+    """Found by fuzzing (tests/fuzz/test_fuzz_live_nodes.py): the explorer measured a NaN
+    outcome's distance to its memory before refusing it, and the memory's KD-tree (built once
+    enough is stored) raised, which stopped the node."""
+    from sgim_msgs.msg import Demonstration
+    from sgim_msgs.srv import RegisterDemonstration
+
+    explorer = ros_processes.start(
+        "explorer", [ROS2RUN, "sgim_nodes", "low_level_explorer", "--ros-args",
+                     "-p", "memory_min_tail:=1", "-p", "memory_max_tail:=1"])
+    register = client.node.create_client(RegisterDemonstration, "/register_demonstration")
+    assert register.wait_for_service(timeout_sec=30)
+
+    def send(outcome):
+        demo = Demonstration(action=[0.1] * 24, outcome=outcome)
+        return client.call(register, RegisterDemonstration.Request(demonstration=demo))
+
+    for k in range(3):  # the memory builds its tree
+        assert send([0.1 * k, -0.2]).accepted
+    for bad in ([float("nan"), 0.0], [float("inf"), 0.0], [0.0, -float("inf")]):
+        refused = send(bad)
+        assert not refused.accepted and "NaN or infinite" in refused.message
+    assert send([0.3, 0.3]).accepted and explorer.poll() is None
+
+
 @pytest.mark.parametrize(("node", "setting", "content", "message"), [
     ("imitation", "imitation_epsilon:=.inf", None, "'imitation_epsilon' = inf is invalid"),
     ("recorder", None, "/**:\n  ros__parameters:\n    teaching_set: /etc/passwd\n",

@@ -100,8 +100,10 @@ class LowLevelExplorer(AsyncNode):
                   response: RegisterDemonstration.Response):
         demo = request.demonstration
         outcome = vec(demo.outcome)
-        before = self.memory.memory.closest_distance(outcome) if outcome.shape == (
-            self.outcome_size,) else float("inf")
+        # Only an outcome the memory will take is measured: a NaN one stopped the nearest-
+        # neighbour search, and the node, once the memory held a tree (found by fuzzing).
+        usable = not check_vector(demo.outcome, self.outcome_size, "demonstration outcome")
+        before = self.memory.memory.closest_distance(outcome) if usable else float("inf")
         why = self.memory.add_demonstration(vec(demo.action), outcome)
         response.accepted, response.message = not why, why
         if not why:
