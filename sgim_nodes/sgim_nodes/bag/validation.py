@@ -38,7 +38,7 @@ def record_index(topic: str, record: Any) -> int:
         if value is not None:
             try:
                 return int(value)
-            except (TypeError, ValueError):
+            except (TypeError, ValueError, OverflowError):  # OverflowError: an infinity
                 continue
     return -1
 
