@@ -101,11 +101,20 @@ def generate_launch_description():
     from launch_ros.actions import Node
 
     def setup(context, *args, **kwargs):
+        from sgim_ros import record_key
+
         arguments = {name: LaunchConfiguration(name).perform(context)
                      for name, _, _ in ARGUMENTS}
         actions: list[Any] = []
-        for name, node_kwargs in node_arguments(arguments):
-            node = Node(**node_kwargs)
+        nodes = node_arguments(arguments)
+        # The run's secret its simulator signs movements with (sgim_ros/record_key.py), kept
+        # beside the bag for the readers and handed to the nodes in their environment.
+        key = record_key.new_key()
+        bag = Path(dict(nodes)["recorder"]["parameters"][0]["output"])
+        bag.parent.mkdir(parents=True, exist_ok=True)
+        record_key.write_key(bag.parent, key)
+        for name, node_kwargs in nodes:
+            node = Node(**node_kwargs, additional_env={record_key.ENV: key})
             actions.append(node)
             # The recorder ends the run once it has written it (after the arbiter's final
             # status); any other node that ends first ends it too, the simulator excepted

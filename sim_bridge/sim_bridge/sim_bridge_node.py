@@ -23,6 +23,7 @@ from sgim_msgs.srv import ExecuteAction
 from sgim_ros import qos
 from sgim_ros.entry import run_node
 from sgim_ros.params import Bounds, Param, declare, non_negative, seed_range
+from sgim_ros.record_key import from_environment, movement_signature
 from sim_bridge.fishing_world import DEFAULT_NOISE, DEFAULT_TIME_STEP, FishingWorld
 
 PARAMS = (  # all read-only: they are the run's physics, recorded in its metadata
@@ -46,6 +47,7 @@ class SimBridgeNode(Node):
         p = declare(self, PARAMS)
         self.world = FishingWorld(seed=p["seed"], noise=p["noise"], time_step=p["time_step"])
         self.executed = 0
+        self._key = from_environment()  # the run's record key (sgim_ros/record_key.py)
         self._movements = self.create_publisher(Movement, "movements", qos.RECORDS)
         self._service = None
         self._listeners = {name.strip() for name in p["movement_listeners"].split(",")}
@@ -85,19 +87,20 @@ class SimBridgeNode(Node):
             return response
         self.executed += 1
         if request.record:
-            self._movements.publish(
-                Movement(
-                    stamp=self.get_clock().now().to_msg(),
-                    index=request.movement_index,
-                    process=request.process,
-                    status=response.status,
-                    action=list(request.action),
-                    outcome=response.outcome,
-                    goal=list(request.goal),
-                    goal_index=request.goal_index,
-                    attempt=request.attempt,
-                )
+            movement = Movement(
+                stamp=self.get_clock().now().to_msg(),
+                index=request.movement_index,
+                process=request.process,
+                status=response.status,
+                action=list(request.action),
+                outcome=response.outcome,
+                goal=list(request.goal),
+                goal_index=request.goal_index,
+                attempt=request.attempt,
             )
+            if self._key:  # the run's proof that this simulator made the record
+                movement.signature = list(movement_signature(self._key, movement))
+            self._movements.publish(movement)
         return response
 
     def destroy_node(self) -> None:

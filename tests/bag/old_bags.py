@@ -100,7 +100,8 @@ def old_run(store: Typestore, n: int = 12, seed: int = 4) -> list[tuple[str, obj
         out.append(("movements", make(
             "sgim_msgs/msg/Movement", stamp=stamp(i), index=i, process=2 if i == n // 2 + 1
             else 0, status=0, action=rng.uniform(-1, 1, 24), outcome=rng.uniform(-1, 1, 2),
-            goal=rng.uniform(-1, 1, 2), goal_index=1, attempt=0)))
+            goal=rng.uniform(-1, 1, 2), goal_index=1, attempt=0,
+            signature=np.zeros(0, dtype=np.uint8))))
     out.append(("region_map", make(
         "sgim_msgs/msg/RegionMap", stamp=stamp(n), movement_index=n, split_count=0,
         goal_count=2, regions=[region])))

@@ -31,7 +31,8 @@ def movement(index: int, rng: np.random.Generator, process: int = 0, status: int
         stamp=stamp(1_000 + index), index=index, process=process, status=status,
         action=rng.uniform(-1, 1, 24),
         outcome=rng.uniform(-1, 1, 2) if ok else np.zeros(0),
-        goal=rng.uniform(-1, 1, 2), goal_index=index // 5 + 1, attempt=attempt)
+        goal=rng.uniform(-1, 1, 2), goal_index=index // 5 + 1, attempt=attempt,
+        signature=np.zeros(0, dtype=np.uint8))
 
 
 def goal(index: int, movement_index: int, rng: np.random.Generator):

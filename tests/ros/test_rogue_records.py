@@ -82,6 +82,26 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
     for k in range(latest + 1, latest + 31):
         movements.publish(Movement(index=k, process=0, status=0, action=[0.0] * 24,
                                    outcome=[float("nan"), float("nan")]))
+    # Forged re-executions (issue 31): the latest real movement again with attempt 1 and
+    # another outcome, right after it, five times; only the run's simulator can sign one.
+    from sgim_ros.record_key import read_key, signed_by
+
+    key = read_key(tmp_path / "rogue")
+    assert key, "the launcher keeps the run's record key in its folder"
+
+    def simulators() -> list[Movement]:  # what the run's simulator published (signed)
+        return [m for m in seen if signed_by(key, m)]
+
+    forged_retries: list[int] = []
+    for _ in range(5):
+        count = len(simulators())
+        assert client.spin_until(lambda count=count: len(simulators()) > count, timeout=60)
+        last = simulators()[-1]
+        forged_retries.append(int(last.index))
+        movements.publish(Movement(index=last.index, process=last.process, status=0,
+                                   action=list(last.action), outcome=[0.99, 0.99],
+                                   goal=list(last.goal), goal_index=last.goal_index,
+                                   attempt=1, signature=list(last.signature)))
     # Competences that must not reach the interest tree.
     for goal, value in (([0.1, 0.1], float("nan")), ([0.1, 0.1], -1e12),
                         ([0.1, 0.2, 0.3], -0.5)):
@@ -116,11 +136,11 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
         run = load_run_folder(run_dir)
     # The budget is exact and every movement is recorded once, the real one.
     assert [m.index for m in run.movements] == list(range(1, MOVEMENTS + 1))
-    real = {}  # the test hears its own forgeries too: the first record is the real one
-    for m in seen:
-        real.setdefault(m.index, m)
-    for k in (5, 6, 7):
+    real = {m.index: m for m in simulators()}  # the test hears its own forgeries too
+    for k in (5, 6, 7, *forged_retries):
         assert np.array_equal(run.movements[k - 1].action, np.asarray(real[k].action))
+        assert np.array_equal(run.movements[k - 1].outcome, np.asarray(real[k].outcome))
+    assert run.superseded == [] and not any(m.attempt for m in run.movements)
     assert all(m.outcome.size == 0 or np.isfinite(m.outcome).all() for m in run.movements)
     # Evaluations at exactly the documented movements, and the run finished.
     assert [e.movement_index for e in run.evaluations] == [0, 100, 200, 300]
@@ -140,7 +160,7 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
     # The bag holds everything received, in one valid MCAP file that rosbags and the MCAP
     # library read as they are; the quarantine counts are beside it.
     raw = list(read_raw(run_dir / "bag"))
-    assert sum(1 for r in raw if r.topic == "/movements") == MOVEMENTS + 3 + 1 + 30
+    assert sum(1 for r in raw if r.topic == "/movements") == MOVEMENTS + 3 + 1 + 30 + 5
     assert sorted(p.name for p in (run_dir / "bag").iterdir()) == ["bag.mcap", "metadata.yaml"]
     from mcap.reader import make_reader
     from rosbags.highlevel import AnyReader
@@ -154,7 +174,8 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
     assert "- bag.mcap" in embedded
     report = yaml.safe_load((run_dir / "bag.quarantine.yaml").read_text())
     q = report["quarantined"]
-    assert q["movements"] == {"duplicate": 3, "beyond-budget": 1, "non-finite": 30}
+    # The forged duplicates and re-executions carry no signature of the run's simulator.
+    assert q["movements"] == {"unsigned": 3 + 5, "beyond-budget": 1, "non-finite": 30}
     assert q["demonstrations"]["non-finite"] == 2 and q["demonstrations"]["size"] == 1
     assert q["demonstrations"]["out-of-bounds"] == 1
     assert q["demonstrations"]["unknown-teaching-index"] == 2

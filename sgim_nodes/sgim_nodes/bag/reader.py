@@ -23,6 +23,7 @@ sits in one.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 import warnings
@@ -40,6 +41,7 @@ from sgim_nodes.bag.records import RECORD_TYPES, RunRecords, to_record
 from sgim_nodes.bag.types import TOPICS
 from sgim_nodes.bag.validation import RunValidator, summarise
 from sgim_nodes.bag.writer import STAGING_PREFIX
+from sgim_ros.record_key import read_key
 
 STORAGE_SUFFIXES = (".mcap", ".db3")
 _PART_NUMBER = re.compile(r"_(\d+)\.(mcap|db3)$")
@@ -273,9 +275,15 @@ def read_messages(path: str | Path, topics: Iterable[str] | None = None
 def limits_for(path: str | Path) -> Limits:
     """The validation limits of the run a bag belongs to: those its recorder validated with
     (the bag's custom_data), else its run folder's params.yaml (the launcher's), else the
-    fishing world's sizes and the packaged teaching set, budget unknown."""
+    fishing world's sizes and the packaged teaching set, budget unknown; with the run's record
+    key from its folder (sgim_ros/record_key.py), whichever they are."""
     path = Path(path)
     bag = path.parent if path.is_file() else path
+    key = read_key(bag.parent) or read_key(bag)
+    return dataclasses.replace(_limits_for(bag), record_key=key)
+
+
+def _limits_for(bag: Path) -> Limits:
     try:
         info = _load_metadata(bag / "metadata.yaml")["rosbag2_bagfile_information"]
         return Limits.from_json((info.get("custom_data") or {})[LIMITS_KEY])

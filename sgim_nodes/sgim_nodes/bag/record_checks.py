@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
@@ -28,6 +28,7 @@ from sgim_nodes.core.teaching import (
     REACHED_RULES,
     TEACHER_CHOICES,
 )
+from sgim_ros import record_key
 
 BOUND = 1.0  # actions, outcomes, goals and regions live in [-1, 1]^n
 # Processes and statuses a published Movement may carry: the evaluator's and a human's
@@ -57,20 +58,30 @@ class Problem:
 
 @dataclass(frozen=True)
 class Limits:
-    """What a run's records must respect. 0 means unknown (that check is skipped)."""
+    """What a run's records must respect. 0 means unknown (that check is skipped).
+
+    ``record_key``: the run's secret with which its simulator signs every movement
+    (sgim_ros/record_key.py); a live node takes it from the environment the launcher gives it,
+    a reader from the run's folder; "" (a run made without one) skips the check. It never
+    goes into to_json: the recorder writes the limits into the bag's metadata."""
 
     action_size: int = 24
     outcome_size: int = 2
     budget: int = 0  # the run's movement budget
     teaching_set_size: int = 0
+    record_key: str = field(default_factory=record_key.from_environment, repr=False,
+                            compare=False)
 
     def to_json(self) -> str:
-        return json.dumps(asdict(self), sort_keys=True)
+        values = asdict(self)
+        values.pop("record_key")
+        return json.dumps(values, sort_keys=True)
 
     @classmethod
     def from_json(cls, text: str) -> Limits:
         values = json.loads(text)
-        return cls(**{k: int(v) for k, v in values.items() if k in cls.__dataclass_fields__})
+        return cls(**{k: int(v) for k, v in values.items()
+                      if k in cls.__dataclass_fields__ and k != "record_key"})
 
     @classmethod
     def for_run(cls, params: Mapping[str, Any]) -> Limits:
@@ -153,7 +164,22 @@ def check_movement(m: Any, limits: Limits) -> Problem | None:
             or vector_problem(m.action, limits.action_size, "action")
             or (vector_problem(m.outcome, limits.outcome_size, "outcome") if ok else
                 vector_problem(m.outcome, 0, "outcome of a failed movement", allow_empty=True))
-            or vector_problem(m.goal, limits.outcome_size, "goal", allow_empty=True))
+            or vector_problem(m.goal, limits.outcome_size, "goal", allow_empty=True)
+            or _signature_problem(m, limits))
+
+
+def _signature_problem(m: Any, limits: Limits) -> Problem | None:
+    """A movement of a run with a key must carry its simulator's signature: no other
+    publisher can make one (sgim_ros/record_key.py)."""
+    if not limits.record_key:
+        return None
+    try:
+        if record_key.signed_by(limits.record_key, m):
+            return None
+    except (TypeError, ValueError, AttributeError):
+        pass
+    return Problem("unsigned", f"movement {int(m.index)} (attempt {int(getattr(m, 'attempt', 0))})"
+                               " is not signed by the run's simulator")
 
 
 def check_goal(g: Any, limits: Limits) -> Problem | None:

@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from sgim_ros.record_key import signature_of
+
 
 def _vec(values) -> np.ndarray:
     return np.array(values, dtype=float)
@@ -33,6 +35,7 @@ class MovementRecord:
     goal: np.ndarray
     goal_index: int
     attempt: int = 0  # > 0: a re-execution of the index (bags before it was recorded: 0)
+    signature: bytes = field(default_factory=bytes)  # the simulator's (sgim_ros/record_key.py)
 
 
 @dataclass
@@ -230,7 +233,8 @@ def to_record(kind: type, time_ns: int, m) -> object:
     if kind is MovementRecord:
         return MovementRecord(t, s, int(m.index), int(m.process), int(m.status), _vec(m.action),
                               _vec(m.outcome), _vec(m.goal), int(m.goal_index),
-                              int(getattr(m, "attempt", 0)))
+                              int(getattr(m, "attempt", 0)),
+                              signature_of(m))
     if kind is GoalRecord:
         return GoalRecord(t, s, int(m.index), int(m.movement_index), _vec(m.point),
                           int(m.region_id), int(m.mode))

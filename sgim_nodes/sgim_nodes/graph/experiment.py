@@ -67,6 +67,7 @@ from sgim_nodes.graph.run_folder import (
     write_metadata,
 )
 from sgim_nodes.graph.supervise import Interrupted, RunFailed, say
+from sgim_ros import record_key
 from sgim_ros.command_line import shown
 from sgim_ros.params import ParameterError
 
@@ -115,6 +116,9 @@ class Plan:
         self.run_dir, self.learner, self.teacher = run_dir, learner, teacher
         self.values, self.meta, self.params_file = values, meta, params_file
         self.log_dir, self.lock, self.done = log_dir, lock, done
+        # The run's secret its simulator signs movements with (sgim_ros/record_key.py): made
+        # with the folder, kept in it for resume and the readers ("" for a run made before).
+        self.record_key = record_key.read_key(run_dir)
         self.nodes = graph(learner, teacher, markers)
         self.address_file = (Path(values.shared["address_file"])
                              if values.shared.get("address_file") else None)
@@ -150,6 +154,7 @@ def plan_new(args: argparse.Namespace) -> Plan:
         raise RunFolderError(f"cannot make the run folder {shown(run_dir)}: "
                              f"{getattr(error, 'strerror', None) or error}") from None
     lock = RunLock.take(run_dir)
+    record_key.write_key(run_dir, record_key.new_key())
     meta = {
         "learner": args.learner, "seed": args.seed, "movements": args.movements,
         "teacher": values.shared["teacher"], "teacher_mode": args.teacher,
@@ -279,6 +284,8 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
     domain = args.domain if reservation is None else reservation.domain_id
     env = isolated_ros_environment(domain)
     os.environ.update(env)  # the launcher's own progress node joins the run's domain
+    if plan.record_key:  # to the nodes only, never as a parameter (any peer can read those)
+        env[record_key.ENV] = plan.record_key
     meta["ros_domain_id"] = domain
     write_metadata(run_dir, meta)
     timeout = args.timeout or default_timeout(args.movements, plan.teacher)

@@ -1,0 +1,82 @@
+"""Movements signed by the run's simulator, so that no other publisher can pass for it.
+
+Why: the graph's records travel on a DDS domain any process may publish on, and a well-formed
+forged Movement (a "re-execution" of the latest index with attempt 1, or a record that comes
+before the real one) looked to every node and reader exactly like the simulator's. The
+launcher now makes a secret for each run (`record.key` in its folder, mode 0600), hands it to
+its nodes in the environment (never as a ROS parameter: any process on the domain can read
+those), and the simulator signs every Movement with it: HMAC-SHA256 over the fields that make
+the movement, the first 16 bytes in `Movement.signature`. Every consumer checks the signature
+(bag/record_checks.py) and quarantines a record that lacks it or whose signature is wrong; the
+bag readers take the key from the run's folder. A run made without a key (an older bag, a node
+started alone) is read as before.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import os
+import secrets
+import struct
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+ENV = "SGIM_RECORD_KEY"
+KEY_FILE = "record.key"
+SIGNATURE_BYTES = 16
+
+
+def new_key() -> str:
+    return secrets.token_hex(32)
+
+
+def from_environment() -> str:
+    """The run's key as the launcher hands it to its nodes ("" when started alone)."""
+    return os.environ.get(ENV, "").strip()
+
+
+def write_key(run_dir: Path, key: str) -> None:
+    """Keep the key in the run folder, readable by its owner only (resume and the readers need
+    it)."""
+    path = Path(run_dir) / KEY_FILE
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    with os.fdopen(fd, "w") as f:
+        f.write(key + "\n")
+
+
+def read_key(run_dir: Path) -> str:
+    """The key of the run in ``run_dir`` ("" when it has none: made before keys existed)."""
+    try:
+        return (Path(run_dir) / KEY_FILE).read_text().strip()
+    except OSError:
+        return ""
+
+
+def _floats(values: Any) -> bytes:
+    data = np.asarray(values if values is not None else (), dtype="<f8").ravel()
+    return struct.pack("<I", data.size) + data.tobytes()
+
+
+def movement_signature(key: str, movement: Any) -> bytes:
+    """The signature of a Movement-like record (fields read by name)."""
+    head = struct.pack("<QBBBQ", int(movement.index), int(getattr(movement, "attempt", 0)),
+                       int(movement.process), int(movement.status),
+                       int(getattr(movement, "goal_index", 0)))
+    body = (head + _floats(movement.action) + _floats(movement.outcome)
+            + _floats(getattr(movement, "goal", ())))
+    return hmac.new(bytes.fromhex(key), body, hashlib.sha256).digest()[:SIGNATURE_BYTES]
+
+
+def signature_of(movement: Any) -> bytes:
+    """The record's signature as bytes, whatever carries it (rclpy's array, rosbags' numpy
+    array, bytes; none in a record of an older bag)."""
+    found = getattr(movement, "signature", None)
+    return b"" if found is None else bytes(bytearray(found))
+
+
+def signed_by(key: str, movement: Any) -> bool:
+    """Whether the record carries the signature the run's simulator gives it."""
+    return hmac.compare_digest(signature_of(movement), movement_signature(key, movement))
