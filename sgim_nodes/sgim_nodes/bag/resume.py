@@ -80,12 +80,65 @@ def resume_point(run_dir: str | Path, config: LearnerConfig | None = None,
                  limit: int = 0) -> ResumePoint:
     records = load_run_folder(run_dir, limit)
     state = rebuild_from_records(records, config)
+    count = state.n_movements
     return ResumePoint(
-        state=state, records=records, count=state.n_movements,
+        state=state, records=records, count=count,
         goal_index=max((g.index for g in records.goals), default=0),
-        demonstration_turns={d.movement_index for d in records.demonstrations},
+        demonstration_turns=finished_turns(records, count),
         demonstrations_given=sum(1 for d in records.demonstrations if d.shown),
-        help_requests_answered={d.help_request for d in records.demonstrations
-                                if d.help_request},
+        help_requests_answered=finished_asks(records, count),
         evaluated={e.movement_index for e in records.evaluations},
     )
+
+
+def finished_turns(records: RunRecords, count: int) -> set[int]:
+    """The teacher's turns (movement counts) the run is done with: those the learner took a
+    demonstration at, and those it went on from. A word given at the count where the run
+    stopped, and not taken, is a turn still to come: the arbiter waits there, and the teacher
+    speaks again (issue 31: counting the word given lost the turn)."""
+    taken = {d.movement_index for d in records.learner_demonstrations if not d.help_request}
+    passed = {d.movement_index for d in records.demonstrations
+              if not d.help_request and d.movement_index < count}
+    return taken | passed
+
+
+def finished_asks(records: RunRecords, count: int) -> set[int]:
+    """The help requests answered for good: the answer taken, or the run went on from it."""
+    taken = {d.help_request for d in records.learner_demonstrations if d.help_request}
+    passed = {d.help_request for d in records.demonstrations
+              if d.help_request and d.movement_index < count}
+    return taken | passed
+
+
+def what_is_redone(records: RunRecords, count: int) -> list[str]:
+    """The resume report, turn by turn: what the run stopped in the middle of, and what the
+    resumed run does about it."""
+    lines = []
+    turns, asks = finished_turns(records, count), finished_asks(records, count)
+    for d in records.demonstrations:
+        if d.help_request and d.help_request not in asks:
+            lines.append(f"help request {d.help_request} at movement {d.movement_index} was "
+                         "answered but the answer was not taken: the learner asks again")
+        elif not d.help_request and d.movement_index not in turns:
+            what = (f"demonstration {d.index} (teaching entry {d.teaching_set_index}) was "
+                    "given" if d.shown else "the teacher said it had nothing to show")
+            lines.append(f"the teacher's turn at movement {d.movement_index}: {what}, but the "
+                         "learner did not take it: the turn is taken again")
+    answered = {c.goal_index for c in records.competences if c.goal_index > 0}
+    last = max((g.index for g in records.goals), default=0)
+    by_goal: dict[int, list[int]] = {}
+    for m in records.movements:
+        by_goal.setdefault(m.goal_index, []).append(m.index)
+    for goal in records.goals:
+        if goal.index in answered:
+            continue
+        made = by_goal.get(goal.index, [])
+        if made:
+            lines.append(f"goal {goal.index} was interrupted after its movements "
+                         f"{made[0]}-{made[-1]}: they stay in memory, but its competence was "
+                         "never recorded, so the interest tree does not hold that attempt "
+                         "(dropped)")
+        elif goal.index == last:
+            lines.append(f"goal {goal.index} was drawn but the run stopped before its first "
+                         "movement: dropped")
+    return lines

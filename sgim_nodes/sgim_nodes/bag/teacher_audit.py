@@ -47,12 +47,20 @@ class IncompleteTurn(ValueError):
 
 def turns(checks: Iterable[TeacherCheckRecord]) -> list[tuple[TeacherCheckRecord, ...]]:
     """The checks grouped by turn, in recording order, each in teaching-set order;
-    IncompleteTurn when a turn lacks an entry, has one twice, or mixes rules or tolerances."""
-    grouped: dict[tuple[int, int], list[TeacherCheckRecord]] = {}
+    IncompleteTurn when a turn lacks an entry, or mixes rules or tolerances. A turn taken
+    again (a run resumed where a demonstration was given and not taken) is a turn of its own:
+    its entries come again after the whole first set."""
+    grouped: list[tuple[tuple[int, int], list[TeacherCheckRecord]]] = []
+    open_: dict[tuple[int, int], list[TeacherCheckRecord]] = {}
     for check in checks:
-        grouped.setdefault(check.turn, []).append(check)
+        group = open_.get(check.turn)
+        if group is None or (len(group) >= group[0].entries and check.teaching_set_index in
+                             {c.teaching_set_index for c in group}):
+            group = open_[check.turn] = []
+            grouped.append((check.turn, group))
+        group.append(check)
     out = []
-    for (movement, ask), group in grouped.items():
+    for (movement, ask), group in grouped:
         group.sort(key=lambda c: c.teaching_set_index)
         first = group[0]
         if ([c.teaching_set_index for c in group] != list(range(first.entries))

@@ -217,6 +217,11 @@ def plan_resume(args: argparse.Namespace) -> Plan | None:
         values = RunParameters(check(shared), values.per_node)
         entry = {"segment": segment.name, "at": datetime.now(UTC).isoformat(),
                  "from_movement": state.recorded}
+        redone = _what_is_redone(run_dir, state.recorded)
+        for line in redone:
+            say(f"resume: {line}")
+        if redone:
+            entry["redone"] = redone
         entry.update(_fingerprint_then_and_now(run_dir, meta, values,
                                                graph(learner, teacher,
                                                      bool(meta.get("markers", True)))))
@@ -232,6 +237,20 @@ def plan_resume(args: argparse.Namespace) -> Plan | None:
     except BaseException:
         lock.release()
         raise
+
+
+def _what_is_redone(run_dir: Path, count: int) -> list[str]:
+    """The resume report (bag/resume.py): what the run stopped in the middle of."""
+    import warnings
+
+    from sgim_nodes.bag.resume import load_run_folder, what_is_redone
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the recordings' damage is said elsewhere
+            return what_is_redone(load_run_folder(run_dir), count)
+    except Exception as error:  # the report must not stop a resume the nodes can make
+        return [f"what the run stopped in the middle of could not be read ({error})"]
 
 
 def _fingerprint_then_and_now(run_dir: Path, meta: dict[str, Any], values: RunParameters,

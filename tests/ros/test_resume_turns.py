@@ -1,0 +1,78 @@
+"""Resume loses nothing (issue 31): a teacher's demonstration recorded but not taken when the
+run stopped is given again, and the resume report says, turn by turn, what was redone."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import time
+import warnings
+
+import pytest
+
+from tests.conftest import REPO
+from tests.ros.test_faults import find_process
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+RUN = str(REPO / "ros_ws" / "run_experiment.sh")
+PERIOD, MOVEMENTS = 50, 120
+
+
+def test_a_demonstration_given_but_not_taken_is_given_again_on_resume(
+        ros_processes, ros_domain, tmp_path, rclpy_context):
+    from sgim_msgs.msg import Demonstration, Movement
+    from sgim_nodes.bag.resume import load_run_folder
+    from sgim_ros import qos
+    from tests.ros.graph_client import GraphClient
+
+    client = GraphClient(rclpy_context, "turn_cutter")
+    moves = client.capture(Movement, "/movements", qos.RECORDS)
+    words = client.capture(Demonstration, "/demonstrations", qos.RECORDS)
+    run_dir = tmp_path / "cut"
+    child = ros_processes.start(
+        "run-cut", [RUN, "sgim-d", "--seed", "1", "--movements", str(MOVEMENTS), "--period",
+                    str(PERIOD), "--eval-every", "60", "--runs-dir", str(tmp_path), "--name",
+                    "cut", "--domain", str(ros_domain), "--quiet", "--param",
+                    "tolerance_noise=0.1"],  # a strict teacher: it shows something each turn
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    params = str(run_dir / "params.yaml")
+    # Stop the explorer at the turn's boundary: its job never ends, so the arbiter never
+    # reaches the turn, while the teacher, which follows the movements, gives its word.
+    assert client.spin_until(lambda: any(m.index == PERIOD for m in moves), timeout=180)
+    explorer = find_process("lib/sgim_nodes/low_level_explorer", params)
+    assert explorer is not None
+    os.kill(explorer, signal.SIGSTOP)
+    assert client.spin_until(lambda: any(w.movement_index == PERIOD for w in words), 60)
+    time.sleep(2.0)  # the recorder writes the word down (it flushes every 0.5 s)
+    os.kill(child.pid, signal.SIGKILL)  # the launcher dies; its nodes follow it
+    os.kill(explorer, signal.SIGKILL)
+    child.communicate(timeout=60)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        before = load_run_folder(run_dir)
+    given = [w for w in before.demonstrations if w.movement_index == PERIOD and w.shown]
+    assert given and not [d for d in before.demonstrations_taken
+                          if d.movement_index == PERIOD], "the turn was taken: no test"
+    client.close()
+
+    resumed = ros_processes.start("resume-cut", [RUN, "--resume", str(run_dir), "--quiet",
+                                                 "--domain", str(ros_domain)],
+                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    output, _ = resumed.communicate(timeout=400)
+    assert resumed.returncode == 0, output[-3000:]
+    assert (f"resume: the teacher's turn at movement {PERIOD}: demonstration "
+            f"{given[0].index}") in output and "the turn is taken again" in output, output
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        after = load_run_folder(run_dir)
+    turns = range(0, MOVEMENTS, PERIOD)
+    taken = [d.movement_index for d in after.demonstrations_taken]
+    assert taken == list(turns), taken  # one demonstration taken at every turn, none lost
+    assert [m.index for m in after.movements] == list(range(1, MOVEMENTS + 1))
+    import yaml
+
+    meta = yaml.safe_load((run_dir / "metadata.yaml").read_text())
+    redone = meta["resumed"][0]["redone"]
+    assert any(f"turn at movement {PERIOD}" in line for line in redone), redone
