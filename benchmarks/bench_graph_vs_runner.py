@@ -116,6 +116,9 @@ def main() -> int:
     p.add_argument("--eval-every", type=int, default=250)
     p.add_argument("--graph-only", action="store_true",
                    help="skip the runner: the graph's time and CPU only (to compare changes)")
+    p.add_argument("--profile", action="store_true",
+                   help="profile every node with cProfile (sgim_ros/entry.py, SGIM_PROFILE): "
+                        "<run>/logs/profile/<node>.prof and .prof.txt; slows the graph")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                    help="a node parameter for the graph run (run_experiment.sh --param), e.g. "
                         "goals_per_job=1 to time one reach_goal job per goal")
@@ -135,9 +138,13 @@ def main() -> int:
     sampler = CpuSampler(out / "graph")
     sampler.start()
     start = time.perf_counter()
+    env = dict(os.environ)
+    if args.profile:
+        env["SGIM_PROFILE"] = str(out / "graph" / "logs" / "profile")
     subprocess.run([str(REPO / "ros_ws" / "run_experiment.sh"), args.learner, *common,
                     "--runs-dir", str(out), "--name", "graph", "--quiet",
-                    *(arg for item in args.param for arg in ("--param", item))], check=True)
+                    *(arg for item in args.param for arg in ("--param", item))], check=True,
+                   env=env)
     graph_s = time.perf_counter() - start
     sampler.stopping.set()
     sampler.join()
@@ -186,6 +193,8 @@ def main() -> int:
                 print(f"  {name:20s} {1000 * cpu / max(moved, 1):6.2f} ms per movement")
         print(f"critical path (medians, movements {a + 1}-{b + 1}): "
               f"{critical_path(run, a + 1, b + 1)}")
+    if args.profile:
+        print(f"profiles (cProfile, by own time): {out / 'graph' / 'logs' / 'profile'}")
     print(f"outputs in {out}")
     return 0
 

@@ -18,6 +18,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import rclpy
@@ -133,14 +134,60 @@ def run_node(factory: Callable[[], Node], args: list[str] | None = None,
         return 2
     spinner = make_executor(node, executor)
     spinner.add_node(node)
+    profile = Profile(node.get_name())
     try:
-        while rclpy.ok() and not getattr(node, "finished", False):
-            spinner.spin_once(timeout_sec=0.1)
+        with profile:
+            while rclpy.ok() and not getattr(node, "finished", False):
+                spinner.spin_once(timeout_sec=0.1)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
+        profile.write()
         tear_down(factory.__name__, spinner, node)
     return int(getattr(node, "exit_code", 0))
+
+
+PROFILE_ENV = "SGIM_PROFILE"
+"""A folder: every node started with it set profiles its spin with cProfile and writes
+<folder>/<node>.prof (pstats) and <node>.prof.txt (the top functions by own time) when it
+ends. benchmarks/bench_graph_vs_runner.py --profile sets it to the run's logs."""
+
+
+class Profile:
+    """cProfile around a node's spin, only when SGIM_PROFILE names a folder."""
+
+    def __init__(self, name: str) -> None:
+        folder = os.environ.get(PROFILE_ENV, "")
+        self.path = Path(folder) / f"{name}.prof" if folder else None
+        self.profiler = None
+
+    def __enter__(self) -> Profile:
+        if self.path is not None:
+            import cProfile
+
+            self.profiler = cProfile.Profile()
+            self.profiler.enable()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.profiler is not None:
+            self.profiler.disable()
+
+    def write(self) -> None:
+        if self.profiler is None or self.path is None:
+            return
+        import io
+        import pstats
+
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.profiler.dump_stats(self.path)
+            text = io.StringIO()
+            pstats.Stats(self.profiler, stream=text).sort_stats("tottime").print_stats(40)
+            self.path.with_name(self.path.name + ".txt").write_text(text.getvalue())
+        except OSError as error:  # a profile must never fail the node
+            print(f"[{self.path.stem}] profile not written: {error}", file=sys.stderr,
+                  flush=True)
 
 
 def tear_down(name: str, executor: Executor, node: Node) -> None:
