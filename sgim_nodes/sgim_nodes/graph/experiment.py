@@ -23,6 +23,7 @@ folder), 128+N stopped by signal N (130: Ctrl-C).
 from __future__ import annotations
 
 import argparse
+import errno
 import os
 import platform
 import shlex
@@ -187,9 +188,12 @@ def plan_resume(args: argparse.Namespace) -> Plan | None:
                 from None
         learner, teacher = meta["learner"], meta.get("teacher_mode") or (
             "automatic" if values.shared.get("teacher") == "automatic" else "external")
+        previous_end = ""
         if meta.get("outcome") == RUNNING:
+            previous_end = _recorder_trouble(run_dir)
             say(f"note: the last launcher of {run_dir} (pid {meta.get('launcher_pid', '?')}) "
-                "ended without recording an outcome: it was killed")
+                "ended without recording an outcome: "
+                + (f"its disk was full ({previous_end})" if previous_end else "it was killed"))
         state = check_resume(run_dir, meta)
         if state.complete and meta.get("outcome") == "finished":
             say(f"{run_dir} already finished ({state.recorded} movements recorded); nothing "
@@ -217,6 +221,8 @@ def plan_resume(args: argparse.Namespace) -> Plan | None:
         values = RunParameters(check(shared), values.per_node)
         entry = {"segment": segment.name, "at": datetime.now(UTC).isoformat(),
                  "from_movement": state.recorded}
+        if previous_end:  # a full disk's error, kept now that there is room again
+            entry["previous_end"] = f"failed: {previous_end}"
         redone = _what_is_redone(run_dir, state.recorded)
         for line in redone:
             say(f"resume: {line}")
@@ -237,6 +243,18 @@ def plan_resume(args: argparse.Namespace) -> Plan | None:
     except BaseException:
         lock.release()
         raise
+
+
+def _recorder_trouble(run_dir: Path) -> str:
+    """What the last segment's recorder said when it could not write (a full disk), from its
+    log; '' when it said nothing of the kind (its launcher was killed)."""
+    from sgim_nodes.bag.resume import segments
+
+    parts = segments(run_dir)
+    last = parts[-1].name if parts else "bag"
+    log = run_dir / "logs" / ("" if last == "bag" else last) / "recorder.log"
+    reason = supervise.log_reason(log)
+    return reason if "could not" in reason or "space" in reason.lower() else ""
 
 
 def _what_is_redone(run_dir: Path, count: int) -> list[str]:
@@ -275,6 +293,8 @@ def _fingerprint_then_and_now(run_dir: Path, meta: dict[str, Any], values: RunPa
 
 def run(args: argparse.Namespace) -> int:
     try:
+        if args.resume is not None:
+            refuse_full_disk(args.resume)
         plan = plan_resume(args) if args.resume is not None else plan_new(args)
         if plan is None:
             return 0
@@ -282,10 +302,52 @@ def run(args: argparse.Namespace) -> int:
         for line in str(error).splitlines():
             say(line)
         return 2
+    except DiskFull as error:
+        say(f"failed: {error}")
+        return 1
+    except OSError as error:  # a run folder that cannot be written: one line, no traceback
+        say(f"failed: {write_failure(error)}")
+        return 1
     try:
         return launch(args, plan)
+    except OSError as error:  # what launch writes before any node starts
+        say(f"failed: {write_failure(error)}; nothing was started")
+        return 1
     finally:
         plan.lock.release()
+
+
+MIN_FREE_BYTES = 1 << 20
+"""A resumed run needs room for its parameters, metadata and the first chunks of its bag."""
+
+
+class DiskFull(RuntimeError):
+    """The disk of the run folder has no room: what a full disk says, in one line."""
+
+
+def write_failure(error: OSError, what: str = "") -> str:
+    """An OSError as one line, with its errno's name (ENOSPC for a full disk)."""
+    name = errno.errorcode.get(error.errno or 0, "")
+    where = error.filename or what
+    return f"cannot write {f'{where}: ' if where else ''}{error.strerror or error} " \
+           f"[{name or 'error'}]"
+
+
+def disk_is_full(path: Path) -> int | None:
+    """The bytes free on the disk holding ``path`` when below MIN_FREE_BYTES, else None."""
+    try:
+        info = os.statvfs(path)
+    except OSError:
+        return None
+    free = info.f_bavail * info.f_frsize
+    return free if free < MIN_FREE_BYTES else None
+
+
+def refuse_full_disk(run_dir: Path) -> None:
+    free = disk_is_full(run_dir)
+    if free is not None:
+        raise DiskFull(f"the disk holding {run_dir} is full ({free} bytes free: No space left "
+                       "on device [ENOSPC]): make room, then --resume again")
 
 
 def launch(args: argparse.Namespace, plan: Plan) -> int:
@@ -322,6 +384,7 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
 
     progress = None
     outcome, code = "failed: the launcher stopped before the run started", 1
+    unwritten = ""  # why metadata.yaml could not be written at the end (a full disk)
     started = time.monotonic()
     supervisor = None
     with supervise.stop_signals() as shielded:
@@ -369,7 +432,18 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
                             duration_s=round(time.monotonic() - started, 2))
                 meta.pop("launcher_pid", None)
                 meta["quarantine"] = quarantine(run_dir)
-                write_metadata(run_dir, meta)
+                try:
+                    write_metadata(run_dir, meta)
+                except OSError as error:  # a full disk: said here, kept by the next resume
+                    unwritten = write_failure(error, METADATA)
+    if unwritten:
+        if outcome.startswith("failed") and disk_is_full(run_dir) is not None \
+                and "ENOSPC" not in outcome:
+            outcome += " (its disk is full: No space left on device [ENOSPC])"
+        what = outcome if code else "failed: the run finished, but its end"
+        say(f"{what}; and {METADATA} could not be written ({unwritten}): it still says "
+            f"'{RUNNING}', which --resume reads once there is room")
+        return code or 1
     say(f"{outcome}; bag and {METADATA} in {run_dir}"
         + (" (interrupted: the bag holds what was recorded; --resume carries on)"
            if code > 128 else ""))
