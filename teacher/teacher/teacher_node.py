@@ -48,6 +48,7 @@ from sgim_nodes.bag.validation import LiveGate
 from sgim_nodes.core.help_request import DEFAULT_TIMING, ON_REQUEST, TIMINGS
 from sgim_nodes.core.learners import inverse_or_centre
 from sgim_nodes.core.random_streams import component_rng, world_seed
+from sgim_nodes.core.repeatable_casts import RepeatableCasts
 from sgim_nodes.core.teaching import (
     ABILITY,
     DEFAULT_DEMONSTRATION_CONTENT,
@@ -134,6 +135,9 @@ class TeacherNode(Node):
         self.action_size = p["action_size"]
         self.world = (FishingWorld(seed=world_seed(p["seed"], "teacher-world"),
                                    noise=p["noise"]) if self.rule == ABILITY else None)
+        # Its casts for the whole run, as the runner's: an answer unchanged since the last
+        # turn is not cast again (core/repeatable_casts.py).
+        self.casts = RepeatableCasts(self.world) if self.world is not None else None
         self.total: int | None = None
         self.given = 0
         self.answered: set[int] = set()  # periodic turns (movement counts) taken
@@ -183,8 +187,10 @@ class TeacherNode(Node):
             return
         self.total = msg.total_movements
         if msg.state == RunStatus.STATE_FINISHED:
+            casts = (f"; casts made {self.casts.made}, kept {self.casts.saved}"
+                     if self.casts is not None else "")
             self.get_logger().info(f"run finished: {self.given} demonstrations in "
-                                   f"{len(self.answered)} turns ({self.rule} rule)")
+                                   f"{len(self.answered)} turns ({self.rule} rule{casts})")
             return
         self._maybe_teach()
 
@@ -215,7 +221,7 @@ class TeacherNode(Node):
         model = self.memory.inverse_model
         return learner_progress(
             self.rule, lambda goal: inverse_or_centre(model, goal, self.action_size),
-            self._own_outcomes, self.world)
+            self._own_outcomes, self.casts)
 
     def _maybe_teach(self) -> None:
         if self.on_request:

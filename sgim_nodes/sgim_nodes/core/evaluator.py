@@ -19,6 +19,7 @@ import numpy as np
 
 from . import portable
 from .environment import Environment, ResultLike, is_success
+from .repeatable_casts import RepeatableCasts, goal_key
 
 # The evaluator's world gets the run's seed plus this, so its noise stream is the same in the
 # single-process runner and in the graph's evaluator node, and independent of the learner's.
@@ -46,11 +47,13 @@ class EvaluationResult:
 
 
 class Evaluator:
-    """Holds the benchmark goals and its own environment."""
+    """Holds the benchmark goals and its own environment; each goal's cast has its own noise
+    (repeatable_casts.py), so an answer unchanged since the last evaluation is not cast again."""
 
     def __init__(self, env: Environment, goals: np.ndarray,
                  failure_distance: float | None = None) -> None:
         self.env = env
+        self.casts = RepeatableCasts(env)
         self.goals = np.asarray(goals, dtype=float)
         if failure_distance is None:
             scale = getattr(env, "scale", None)
@@ -64,7 +67,7 @@ class Evaluator:
         failed = np.zeros(len(self.goals), dtype=bool)
         reached = np.full(self.goals.shape, np.nan)
         for i, goal in enumerate(self.goals):
-            point = landing_point(self.env.execute(np.asarray(inverse(goal), dtype=float)))
+            point = landing_point(self.casts.execute(goal_key(goal), inverse(goal)))
             if point is not None:
                 reached[i] = point
                 dist[i] = portable.norm(reached[i] - goal)

@@ -49,7 +49,13 @@ class PlanarArm:
         size = max(h - lo for lo, h in zip(*self.box, strict=True))
         declared = gaussian_noise_2d(noise) if noise > 0 else NOISE_FREE_RESOLUTION * size
         self.scale = WorldScale(self.box[0], self.box[1], declared)
-        self.rng = np.random.default_rng(seed)
+        self.reseed(seed)
+
+    def reseed(self, seed: int) -> None:
+        """Restart the noise stream as if the arm had been built with ``seed``
+        (repeatable_casts.py gives each evaluation goal its own)."""
+        self.seed = int(seed)
+        self.rng = np.random.default_rng(self.seed)
 
     def forward(self, actions: np.ndarray) -> np.ndarray:
         """Noise-free end points for one action (n,) or a batch (b, n)."""

@@ -38,6 +38,7 @@ from .help_request import (
 from .learners import LEARNER_NAMES, Learner, make_learner
 from .planar_arm import ARMS, PlanarArm, benchmark_goals, teaching_set
 from .random_streams import SEED_MAX, component_rng, world_seed
+from .repeatable_casts import RepeatableCasts
 from .scale import WorldScale, unit_box
 from .teaching import (
     ABILITY,
@@ -183,7 +184,8 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
         if teacher_rule == ABILITY:
             if world.make_teacher_env is None:
                 raise ValueError("the teacher's 'ability' rule needs world.make_teacher_env")
-            teacher_env = world.make_teacher_env()
+            # One for the whole run: an answer unchanged since the last turn is not cast again.
+            teacher_env = RepeatableCasts(world.make_teacher_env())
     try:
         requests = None
         if teacher is not None and timing == ON_REQUEST:
@@ -198,7 +200,7 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
 
 def _run(learner: Learner, world: World, movements: int, eval_every: int,
          write: Callable[[dict[str, Any]], None], teacher: Teacher | None, teacher_rule: str,
-         teacher_env: Environment | None, progress: Callable[[int], None] | None,
+         teacher_env: RepeatableCasts | None, progress: Callable[[int], None] | None,
          content: str = DEFAULT_DEMONSTRATION_CONTENT,
          requests: HelpRequests | None = None) -> list[float]:
     evaluator = Evaluator(world.eval_env, world.goals, world.scale.diagonal)

@@ -54,6 +54,7 @@ import numpy as np
 from . import portable
 from .environment import Environment, Status
 from .evaluator import landing_point
+from .repeatable_casts import RepeatableCasts, goal_key
 
 PAPER_PERIOD = 150
 OWN_PROCESSES = ("goal_directed", "exploration", "random")
@@ -112,13 +113,16 @@ class CastMeasure:
     the whole cast, for the turn's checks. A cast that comes down on land is measured to its
     touch-down, as the evaluator measures it; one that never comes down is infinitely far."""
 
-    def __init__(self, inverse: Callable[[np.ndarray], np.ndarray], world: Environment) -> None:
+    def __init__(self, inverse: Callable[[np.ndarray], np.ndarray],
+                 world: Environment | RepeatableCasts) -> None:
         self.inverse = inverse
-        self.world = world
+        # The teacher's casts outlive one turn (the runner and the node keep one
+        # RepeatableCasts): an answer unchanged since the last turn is not cast again.
+        self.casts = world if isinstance(world, RepeatableCasts) else RepeatableCasts(world)
 
     def cast(self, goal: np.ndarray) -> Cast:
         action = np.asarray(self.inverse(goal), dtype=float)
-        result = self.world.execute(action)
+        result = self.casts.execute(goal_key(goal), action)
         point = landing_point(result)
         distance = np.inf if point is None else portable.norm(point - goal)
         return Cast(action, int(result.status), point, distance)
@@ -313,7 +317,7 @@ def check_rule(rule: str) -> str:
 
 
 def cast_distance(inverse: Callable[[np.ndarray], np.ndarray],
-                  world: Environment) -> CastMeasure:
+                  world: Environment | RepeatableCasts) -> CastMeasure:
     """The ``ability`` rule's measure (CastMeasure): goal -> how far from it the action
     ``inverse`` gives for it lands when cast in ``world`` (the teacher's own)."""
     return CastMeasure(inverse, world)
@@ -321,7 +325,7 @@ def cast_distance(inverse: Callable[[np.ndarray], np.ndarray],
 
 def learner_progress(rule: str, inverse: Callable[[np.ndarray], np.ndarray],
                      own_outcomes: Callable[[], np.ndarray],
-                     world: Environment | None) -> Reached:
+                     world: Environment | RepeatableCasts | None) -> Reached:
     """What ``Teacher.choose`` judges on under ``rule``: the inverse model's casts in the
     teacher's ``world`` (ability), or the outcomes of the learner's own movements."""
     if check_rule(rule) == OWN_MOVEMENTS:

@@ -144,9 +144,11 @@ class EvaluatorNode(Node):
             mean_distance=result.mean_distance, outcome_size=goals.shape[1],
             goals=floats(goals), reached=floats(result.reached),
             distances=floats(result.distances)))
+        casts = self.evaluator.casts
         self.get_logger().info(f"evaluation at {count}: mean distance "
                                f"{result.mean_distance:.4f} ({int(np.sum(result.failed))} "
-                               f"failed, {time.perf_counter() - start:.1f} s)")
+                               f"failed, {time.perf_counter() - start:.1f} s; casts made "
+                               f"{casts.made}, kept {casts.saved} in all)")
 
     def destroy_node(self) -> None:
         self.world.close()
