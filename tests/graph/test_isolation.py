@@ -34,9 +34,14 @@ def test_isolated_environment_keeps_discovery_on_this_host():
     assert env["ROS_DOMAIN_ID"] == "42"
     assert env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
     assert "ROS_LOCALHOST_ONLY" not in env and env["PATH"] == "/bin"
-    # A user who asks for more keeps it.
+    # On this host alone, Fast DDS talks over shared memory only.
+    assert env["FASTDDS_BUILTIN_TRANSPORTS"] == "SHM"
+    # A user who asks for more keeps it, and the transports that reach it.
     wide = isolated_ros_environment(3, {"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"})
     assert wide["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "SUBNET"
+    assert "FASTDDS_BUILTIN_TRANSPORTS" not in wide
+    own = isolated_ros_environment(3, {"FASTDDS_BUILTIN_TRANSPORTS": "UDPv4"})
+    assert own["FASTDDS_BUILTIN_TRANSPORTS"] == "UDPv4"
 
 
 STUBBORN = """

@@ -67,9 +67,18 @@ def reserve_domain(preferred: int | None = None) -> DomainReservation:
 
 
 def isolated_ros_environment(domain_id: int, base: dict[str, str] | None = None) -> dict[str, str]:
-    """The environment of a process that must only talk to its own graph on this host."""
+    """The environment of a process that must only talk to its own graph on this host.
+
+    A graph kept on this host talks over Fast DDS's shared memory alone (its discovery too):
+    measured against its default transports (UDP and shared memory), 600 SGIM-D movements
+    through the graph took 30 % less wall time and 5-12 % less CPU (docs/notes/measurements.md,
+    2026-12-04). A range other than LOCALHOST, or a FASTDDS_BUILTIN_TRANSPORTS of the user's,
+    keeps its say."""
     env = dict(os.environ if base is None else base)
     env["ROS_DOMAIN_ID"] = str(domain_id)
     env.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     env.pop("ROS_LOCALHOST_ONLY", None)  # deprecated; it would override the range above
+    if env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST" and \
+            env.get("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp") == "rmw_fastrtps_cpp":
+        env.setdefault("FASTDDS_BUILTIN_TRANSPORTS", "SHM")
     return env
