@@ -77,6 +77,9 @@ def test_a_graph_runs_fingerprint_depends_on_what_shapes_it_only():
     base = of(seed=0, output="/tmp/a")
     assert of(seed=7, output="/tmp/b", storage="sqlite3").value == base.value
     assert of(seed=0, output="/tmp/a", overrides={"service_timeout": 99.0}).value == base.value
+    # how patient the nodes are (read-only, but operational) does not make another learner
+    patient = {"startup_timeout": 600.0, "settle_time": 9.0, "map_timeout": 300.0}
+    assert of(overrides=patient).value == base.value
     assert of(overrides={"zeta": 20}).differences(base) == ["parameters (zeta)"]
     assert of(period=50).differences(base) == ["parameters (demonstration_period)"]
     assert of(movements=1000).value != base.value

@@ -35,6 +35,7 @@ from sgim_nodes.bag.reader import BagReadWarning, NotABagError
 from sgim_nodes.bag.records import RegionMapRecord
 from sgim_nodes.bag.run_folder import load_run_folder, segments
 from sgim_nodes.core.environment import PROCESS_CODES, Status
+from sgim_nodes.provenance import fingerprint
 
 CACHE_NAME = "analysis_cache.npz"
 CACHE_VERSION = 2  # 2: validated records, every segment
@@ -46,9 +47,8 @@ LEARNER_ORDER = ("sgim-d", "saggriac", "random-goals", "demo-only", "random")
 _RUN_NAME = re.compile(r"^(?P<learner>.+)-seed(?P<seed>\d+)$")
 _WANTED = ("movements", "evaluations", "region_map", "demonstrations", "demonstrations_taken",
            "run_status")
-# Parameters that differ from run to run without changing the experiment.
-PER_RUN = frozenset({"seed", "output", "resume_from", "resume_segments", "storage",
-                     "wait_for_recorder", "ros_domain_id"})
+# Parameters that differ from run to run without changing the experiment: the fingerprint's.
+PER_RUN = fingerprint.PER_RUN | fingerprint.OPERATIONAL
 
 Warn = Callable[[str], None]
 

@@ -28,7 +28,7 @@ PARAMS = learner_node_params(
           "teacher acts)", lambda v: v >= 0 or v == FOREVER, f">= 0 or {FOREVER:g}"),
     Param("wait_for_evaluation", True, "finish only after the final evaluation"),
     Param("wait_for_recorder", True, "start only once a recorder listens"),
-    Param("startup_timeout", 60.0, "seconds to wait for the other nodes (their servers, "
+    Param("startup_timeout", 120.0, "seconds to wait for the other nodes (their servers, "
           "publishers and the listeners' *_ready services, sgim_ros/ready.py) before the start",
           positive),
     Param("teacher_timeout", 60.0, "seconds to wait for the teacher at a boundary", positive,

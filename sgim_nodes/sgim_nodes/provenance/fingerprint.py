@@ -43,6 +43,10 @@ PER_RUN = frozenset({"seed", "output", "resume_from", "resume_segments", "storag
 """Parameters that differ between runs of one experiment without changing what the learner
 does: the seed (a run's identity, kept beside the fingerprint), where it writes, how its
 graph is wired and served."""
+OPERATIONAL = frozenset({"startup_timeout", "settle_time", "map_timeout", "execute_timeout",
+                         "wait_for_evaluation", "render_casts"})
+"""Read-only parameters that say how patient a node is or what it draws, not what the
+learner does: a slow machine may need a longer startup_timeout for the very same runs."""
 SILENT_NODES = frozenset({"recorder", "markers"})
 """Nodes that only record or draw: their parameters cannot change a movement."""
 
@@ -192,12 +196,13 @@ def graph_parameters(node_parameters: Mapping[str, Mapping[str, Any]],
                      read_only: Mapping[str, Iterable[str]]) -> dict[str, dict[str, Any]]:
     """The parameters of a graph run that shape its movements: of every node but the silent
     ones, those it declares read-only (the ones it may change while it runs are timeouts),
-    less the per-run ones (PER_RUN). ``read_only``: node -> its read-only parameter names."""
+    less the per-run (PER_RUN) and operational (OPERATIONAL) ones. ``read_only``: node -> its
+    read-only parameter names."""
     out = {}
     for node, values in node_parameters.items():
         if node in SILENT_NODES:
             continue
-        keep = set(read_only.get(node, ())) - PER_RUN
+        keep = set(read_only.get(node, ())) - PER_RUN - OPERATIONAL
         out[node] = {k: v for k, v in values.items() if k in keep}
     return out
 
