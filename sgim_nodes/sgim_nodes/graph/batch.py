@@ -135,7 +135,7 @@ def start(job: Job, args: argparse.Namespace, group: ProcessGroup) -> bool:
         shutil.rmtree(job.folder)
     argv = [str(RUN), job.learner, "--seed", str(job.seed), "--movements", str(args.movements),
             "--eval-every", str(args.eval_every), "--runs-dir", str(args.runs_dir), "--name",
-            job.name, "--quiet", "--timeout", str(args.run_timeout)]
+            job.name, "--quiet", "--no-markers", "--timeout", str(args.run_timeout)]
     for item in args.param:
         argv += ["--param", item]
     args.runs_dir.mkdir(parents=True, exist_ok=True)
