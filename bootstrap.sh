@@ -47,6 +47,7 @@ fingerprint() {
     sort -z | xargs -0 sha256sum) | sha256sum | cut -c1-16
 }
 REQ_STAMP="$VENV/.sgim-requirements"
+TOOLS_STAMP="$VENV/.sgim-build-tools"
 BUILD_STAMP="$WS/install/.sgim-build"
 req_sum="$( (sha256sum "$REPO/requirements.txt"; "$PYTHON" --version) | sha256sum | cut -c1-16)"
 
@@ -63,7 +64,13 @@ if [[ $FORCE == 1 || ! -x "$VENV/bin/python" || "$(cat "$REQ_STAMP" 2>/dev/null)
   say "pointing the ROS wheels' CMake files at this machine's Python"
   "$VENV/bin/python" "$REPO/ros_ws/fix_wheel_cmake_paths.py" "$VENV"
   echo "$req_sum" > "$REQ_STAMP"
-  rm -f "$BUILD_STAMP"  # new ROS packages may change what the build produces
+  # New ROS packages, colcon or code generators may change what the build produces; another
+  # pinned package (a test tool) changes nothing there, and rebuilds nothing.
+  tools_sum="$(grep -iE '^(ros-|colcon|setuptools|empy|lark|catkin|numpy)' \
+    "$REPO/requirements.txt" | sha256sum | cut -c1-16)"
+  [[ "$(cat "$TOOLS_STAMP" 2>/dev/null || echo "$tools_sum")" == "$tools_sum" ]] ||
+    rm -f "$BUILD_STAMP"
+  echo "$tools_sum" > "$TOOLS_STAMP"
 fi
 
 # 4. The colcon build of ros_ws.
