@@ -34,6 +34,41 @@ def pytest_configure(config: pytest.Config) -> None:
         signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object:
+    """Workers (`./test.sh`, `-n 2`) take whole files, longest first (tests/scheduling.py)."""
+    from tests.scheduling import make_scheduler
+
+    return make_scheduler(config, log)
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    """A worker hands its fuzz counts to the controller, which prints the summary."""
+    workeroutput = getattr(session.config, "workeroutput", None)
+    if workeroutput is not None:
+        from tests.fuzz.tally import COUNTS
+
+        workeroutput["fuzz_counts"] = {t: dict(c) for t, c in COUNTS.items()}
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_testnodedown(node: object, error: object) -> None:
+    from tests.fuzz.tally import COUNTS
+
+    for target, counts in getattr(node, "workeroutput", {}).get("fuzz_counts", {}).items():
+        COUNTS[target].update(counts)
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    """What the fuzz tests tried (tests/fuzz/tally.py), from this process or its workers."""
+    from tests.fuzz.tally import COUNTS, summary
+
+    if COUNTS:
+        terminalreporter.section("fuzz cases")
+        for line in summary():
+            terminalreporter.write_line(line)
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """Skip ROS tests outside the workspace, unless the test command demands ROS."""
     missing = _ros_missing()
@@ -55,8 +90,13 @@ def ros_domain() -> Iterator[int]:
     """One ROS domain for the whole test session, discovery kept on this host.
 
     The pytest process itself joins it, so in-process rclpy nodes and the children started
-    through `ros_processes` see each other and nothing else.
+    through `ros_processes` see each other and nothing else. Under ./test.sh each worker is a
+    session of its own, and so has a domain of its own. `./test.sh --quick` starts no graph:
+    a test that asks for a domain there lacks its `ros` mark.
     """
+    if os.environ.get("SGIM_TEST_QUICK") == "1":
+        pytest.fail("./test.sh --quick runs no ROS graph, but this test needs a ROS domain: "
+                    "mark it `ros` (pytest.mark.ros)", pytrace=False)
     with reserve_domain() as reservation:
         saved = dict(os.environ)
         os.environ.clear()
