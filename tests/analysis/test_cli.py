@@ -18,6 +18,7 @@ def _png(path: Path) -> bool:
     return path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.slow
 def test_cli_writes_every_file(study: Path, tmp_path: Path, capsys: pytest.CaptureFixture
                                ) -> None:
     out = tmp_path / "out"
@@ -45,6 +46,7 @@ def test_cli_writes_every_file(study: Path, tmp_path: Path, capsys: pytest.Captu
     assert "| sgim-d | random | 1/3, 0/3 | +0.33 [-0.29, +0.79] | 1 | 1 | 0.1 |" in md
 
 
+@pytest.mark.slow
 def test_default_output_folder_and_times(study: Path) -> None:
     assert main([str(study)]) == 0
     assert all((study / "analysis" / name).exists() for name in FILES)

@@ -31,6 +31,7 @@ def test_a_floor_of_other_goals_is_not_shown(monkeypatch: pytest.MonkeyPatch) ->
     assert benchmark_floor() is None
 
 
+@pytest.mark.slow
 def test_report_shows_each_learner_above_the_floor(study: Path, tmp_path: Path,
                                                    monkeypatch: pytest.MonkeyPatch) -> None:
     floor = FloorSummary(mean=0.07, nearest_mean=0.1, goals=129, k=3)

@@ -42,6 +42,7 @@ def test_runs_of_two_numpy_versions_are_refused(make_study, tmp_path: Path,
     assert "code:" not in err and "python:" not in err  # only what differs is named
 
 
+@pytest.mark.slow
 def test_allow_mixed_pools_them_and_says_so_at_the_top(make_study, tmp_path: Path) -> None:
     study = make_study(fingerprints={"random-seed2": fingerprint(numpy="1.26.4")})
     out = tmp_path / "out"
@@ -54,6 +55,7 @@ def test_allow_mixed_pools_them_and_says_so_at_the_top(make_study, tmp_path: Pat
     assert mixed[0]["holders"]["1.26.4"] == ["random-seed2"]
 
 
+@pytest.mark.slow
 def test_a_study_without_fingerprints_is_refused(make_study, tmp_path: Path,
                                                  capsys: pytest.CaptureFixture) -> None:
     names = [f"{lr}-seed{s}" for lr in ("sgim-d", "random") for s in range(3)]

@@ -5,7 +5,11 @@ from __future__ import annotations
 import json
 import subprocess
 
+import pytest
+
 from tests.conftest import PYTHON, REPO
+
+pytestmark = pytest.mark.slow  # each test runs the benchmark script: seconds each
 
 SCRIPT = str(REPO / "benchmarks" / "bench_learners.py")
 

@@ -130,7 +130,9 @@ def test_a_demonstration_must_show_something():
         learner.on_demonstration(None, None)
 
 
-@pytest.mark.parametrize("content", DEMONSTRATION_CONTENTS)
+@pytest.mark.parametrize("content", [
+    pytest.param(c, marks=pytest.mark.slow) if c == "means-and-goal" else c
+    for c in DEMONSTRATION_CONTENTS])
 def test_the_runner_shows_the_learner_only_the_modes_part(content):
     world = runner.build_world("planar-arm", 1)
     learner = runner.make_learner("sgim-d", 12, 2, 1, None, world.scale)

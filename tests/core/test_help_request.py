@@ -72,6 +72,7 @@ def test_the_teacher_answers_with_the_unreached_entry_nearest_the_asked_goal():
     assert t.answer(np.array([0.0, 0.0]), outcomes) is None
 
 
+@pytest.mark.slow
 def test_the_runner_teaches_only_when_asked_for_the_goal_asked_about():
     world = runner.build_world("planar-arm", 4)
     learner = runner.make_learner("sgim-d", 12, 2, 4, None, world.scale)

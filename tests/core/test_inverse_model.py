@@ -157,6 +157,7 @@ def test_empty_memory_gives_none():
         assert InverseModel(Memory(1, 2), method).estimate(np.zeros(2)) is None
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("world", ["arm-7", "arm-20"])
 def test_never_worse_than_the_nearest_neighbour_on_the_same_memory(world):
     """Memories of short goal-babbling runs; both models are scored on the noise-free arm (no

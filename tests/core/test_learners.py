@@ -38,6 +38,7 @@ def test_failed_movements_count_but_are_not_stored(name):
     assert len(learner.memory) == 200
 
 
+@pytest.mark.slow
 def test_goal_babbling_uses_both_processes_and_feeds_the_tree():
     learner = make("saggriac", 1)
     labels = _drive(learner, PlanarArm(seed=1), 800)
@@ -153,6 +154,7 @@ def test_random_goals_draws_every_goal_uniformly():
     assert learner.n_goals > 0 and learner.last_goal_mode == 2
 
 
+@pytest.mark.slow
 def test_goal_babbling_beats_random_on_the_twenty_joint_arm():
     """Short runs over fixed seeds on the benchmark arm where random actions pile up near the
     straight posture (bench_learners.py measures the full 5000-movement comparison)."""

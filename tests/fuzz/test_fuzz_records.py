@@ -15,6 +15,7 @@ import math
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -138,6 +139,7 @@ def _accepted_is_usable(topic: str, r) -> None:
             assert math.isfinite(float(region.interest))
 
 
+@pytest.mark.slow
 @fuzz(400)
 @given(stream=st.lists(st.sampled_from(sorted(RECORDS)).flatmap(
     lambda topic: st.tuples(st.just(topic), RECORDS[topic])), min_size=1, max_size=8))

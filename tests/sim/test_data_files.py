@@ -156,6 +156,7 @@ def test_floor_matches_the_benchmark_set() -> None:
     assert floor.mean == pytest.approx(float(np.mean(floor.per_goal)))
 
 
+@pytest.mark.slow
 def test_floor_regenerates_exactly_for_some_goals(casts) -> None:
     stored, goals = _stored(BENCHMARK_FLOOR), load_benchmark_goals()
     pond = int(np.flatnonzero(in_isolated_region(goals))[0])
