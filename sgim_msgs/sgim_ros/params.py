@@ -228,12 +228,16 @@ def _universal_problem(value: Any) -> str | None:
 
 
 def _shown(value: Any, limit: int = 80) -> str:
-    """A value in a message: its repr on one line, cut to a reasonable size (an integer of
-    thousands of digits has no repr at all: Python refuses to print it)."""
+    """A value in a message: its repr on one line, cut in the middle to a reasonable size, so
+    that a long path keeps its file name (an integer of thousands of digits has no repr at
+    all: Python refuses to print it)."""
     if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**40:
         return f"an integer of {value.bit_length()} bits"
     text = repr(value)
-    return text if len(text) <= limit else text[:limit - 3] + "..."
+    if len(text) <= limit:
+        return text
+    head = (limit - 3) // 2
+    return text[:head] + "..." + text[len(text) - (limit - 3 - head):]
 
 
 def declare(node, params: Sequence[Param]) -> dict[str, Any]:

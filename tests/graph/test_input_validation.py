@@ -142,6 +142,21 @@ def test_every_node_that_takes_a_teaching_set_checks_it_the_same_way():
     assert takers == declared and {"teacher", "recorder", "social_interaction"} <= takers
 
 
+def test_a_long_path_in_a_refusal_keeps_its_file_name():
+    """A refused path deep in a folder tree is cut in its middle: the line stays short and
+    still names the file the user must fix."""
+    from sgim_nodes.graph.description import NODES
+    from sgim_ros.params import ParameterError
+
+    param = next(p for p in NODES["teacher"].params if p.name == "teaching_set")
+    deep = "/tmp/" + "a-very-long-folder-name/" * 8 + "nope.npz"
+    with pytest.raises(ParameterError) as refusal:
+        param.validate(deep)
+    message = str(refusal.value)
+    assert "nope.npz'" in message and "/tmp/a-very" in message and "..." in message
+    assert len(message) < len(deep)
+
+
 # --- seeds ------------------------------------------------------------------------------------
 def test_a_seed_beyond_the_graphs_range_is_refused_by_the_launcher(capsys):
     for seed in ("99999999999999999999", "4294967296", "-1"):
