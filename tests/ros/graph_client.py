@@ -42,6 +42,12 @@ class GraphClient:
         self.node.create_subscription(msg_type, topic, received.append, qos)
         return received
 
+    def heard_by(self, topic: str, node_name: str) -> bool:
+        """Whether the node named `node_name` subscribes to `topic` (not merely someone: a
+        node another test left in the domain would do for get_subscription_count)."""
+        return any(info.node_name == node_name
+                   for info in self.node.get_subscriptions_info_by_topic(topic))
+
     def close(self) -> None:
         self.executor.shutdown()
         self.node.destroy_node()

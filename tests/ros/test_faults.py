@@ -49,7 +49,7 @@ def test_a_killed_simulator_is_restarted_and_no_movement_is_lost_or_doubled(
     seen = client.capture(Movement, "/movements", qos.RECORDS)
     child = ros_processes.start(
         "run-sim-kill",
-        [RUN, "saggriac", "--seed", "4", "--movements", "300", "--eval-every", "0",
+        [RUN, "saggriac", "--seed", "4", "--movements", "200", "--eval-every", "0",
          "--runs-dir", str(tmp_path), "--name", "sim-kill", "--domain", str(ros_domain),
          "--quiet", "--timeout", "240", "--param", "service_timeout=2.0"],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
@@ -67,12 +67,12 @@ def test_a_killed_simulator_is_restarted_and_no_movement_is_lost_or_doubled(
 
     raw = [m.index for topic, _, m in read_messages(tmp_path / "sim-kill" / "bag",
                                                   ["movements"])]
-    with pytest.warns(UserWarning, match="re-executed") if len(raw) > 300 else _no_warning():
+    with pytest.warns(UserWarning, match="re-executed") if len(raw) > 200 else _no_warning():
         run = load_run(tmp_path / "sim-kill" / "bag")
     # Every movement once, in order: a movement the dying simulator recorded but never
     # answered was executed again, and only that later record counts.
-    assert [m.index for m in run.movements] == list(range(1, 301))
-    assert len(raw) - 300 <= 1 and raw[-1] == 300
+    assert [m.index for m in run.movements] == list(range(1, 201))
+    assert len(raw) - 200 <= 1 and raw[-1] == 200
     meta = yaml.safe_load((tmp_path / "sim-kill" / "metadata.yaml").read_text())
     assert meta["restarts"] == {"sim_bridge": 1} and meta["outcome"] == "finished"
 
@@ -82,7 +82,7 @@ def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
     """Interrupted where it cannot have finished, whatever the machine's load: the teacher
     never answers turn 100 (its node is replaced by a sleeper; this test gives turn 0's
     word), so the arbiter waits at movement 100, and Ctrl-C comes once the bag holds it."""
-    from sgim_msgs.msg import Demonstration, Movement, RunStatus
+    from sgim_msgs.msg import Demonstration, Movement, RunStatus, TeacherCheck
     from sgim_nodes.bag.reader import read_messages
     from sgim_nodes.bag.resume import load_run_folder, segments
     from sgim_ros import qos
@@ -90,7 +90,8 @@ def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
     from tests.ros.graph_client import GraphClient
 
     # This test stands in for the teacher: named like it, it hears the movements (the
-    # simulator waits for every listener of the graph) and answers teacher_ready.
+    # simulator waits for every listener of the graph), answers teacher_ready and publishes
+    # on teacher_checks (the arbiter waits for that publisher before movement 0).
     client = GraphClient(rclpy_context, "teacher")
     status: list = []
     serve_ready(client.node, "teacher_ready", {
@@ -99,11 +100,12 @@ def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
         "movements": client.node.create_subscription(Movement, "/movements", lambda _: None,
                                                      qos.RECORDS)})
     words = client.node.create_publisher(Demonstration, "/demonstrations", qos.RECORDS)
+    client.node.create_publisher(TeacherCheck, "/teacher_checks", qos.RECORDS)  # kept by the node
     common = ["--domain", str(ros_domain), "--quiet", "--timeout", "600"]
     silent_teacher = f"teacher={sys.executable} -c 'import time; time.sleep(3600)'"
     first = ros_processes.start(
         "run-interrupted",
-        [RUN, "sgim-d", "--seed", "5", "--movements", "300", "--eval-every", "100",
+        [RUN, "sgim-d", "--seed", "5", "--movements", "200", "--eval-every", "100",
          "--period", "100", "--runs-dir", str(tmp_path), "--name", "cut", *common,
          "--param", "teacher_timeout=600.0", "--prefix", silent_teacher],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
@@ -142,10 +144,10 @@ def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
     assert second.returncode == 0, output[-3000:]
     assert [p.name for p in segments(cut)] == ["bag", "bag.resume1"]
     run = load_run_folder(cut)
-    assert [m.index for m in run.movements] == list(range(1, 301))
-    assert {0, 100, 200, 300} <= {e.movement_index for e in run.evaluations}
+    assert [m.index for m in run.movements] == list(range(1, 201))
+    assert {0, 100, 200} <= {e.movement_index for e in run.evaluations}
     turns = [d.movement_index for d in run.demonstrations]
-    assert sorted(turns) == [0, 100, 200] and len(set(turns)) == 3  # no turn given twice
+    assert sorted(turns) == [0, 100] and len(set(turns)) == 2  # no turn given twice
     meta = yaml.safe_load((cut / "metadata.yaml").read_text())
     assert meta["outcome"] == "finished" and len(meta["resumed"]) == 1
     # The resumed recorder validated its segment from the run's count, not from movement 0.

@@ -126,8 +126,8 @@ def test_list_teach_goal_and_bad_input_through_the_prompt(ros_processes, client,
     term = Terminal(child, client)
     term.wait_for(PROMPT)
     assert "4 teaching-set entries" in term.output()
-    assert client.spin_until(lambda: movements.get_subscription_count() > 0
-                             and evaluations.get_subscription_count() > 0)
+    assert client.spin_until(lambda: client.heard_by("/movements", "human_input")
+                             and client.heard_by("/evaluations", "human_input"))
 
     learner = np.full(A, -0.3)
     sent = [_movement(1, learner, [0.5, 0.52]),  # reaches teaching entry 1
@@ -201,7 +201,7 @@ def test_list_teach_goal_and_bad_input_through_the_prompt(ros_processes, client,
     # The budget is spent: the arbiter's refusal of a late demonstration is a warning, and
     # the prompt refuses to send another one, saying why.
     status = client.node.create_publisher(RunStatus, "/run_status", qos.RECORDS)
-    assert client.spin_until(lambda: status.get_subscription_count() > 0)
+    assert client.spin_until(lambda: client.heard_by("/run_status", "human_input"))
     status.publish(RunStatus(state=RunStatus.STATE_RUNNING, movement_index=3,
                              total_movements=3, message="demonstration 4 (human) refused: "
                              "the movement budget is spent"))
@@ -319,7 +319,7 @@ def test_a_terminal_gets_line_editing_history_and_news_above_the_prompt(
         assert "^[[" not in term.output()  # no arrow key printed as garbage
         # News from the run while "li" is half typed: above the prompt, which is redrawn with
         # the typed text, so finishing the line still runs "list".
-        assert client.spin_until(lambda: status.get_subscription_count() > 0)
+        assert client.spin_until(lambda: client.heard_by("/run_status", "human_input"))
         start = term.type("li", end="")
         term.wait_for("li", start)
         status.publish(RunStatus(state=RunStatus.STATE_RUNNING, movement_index=5,
@@ -330,7 +330,7 @@ def test_a_terminal_gets_line_editing_history_and_news_above_the_prompt(
         # A new evaluation redraws the prompt in place, typed text kept: its error is the
         # latest, not the one of when the prompt was drawn (it stayed 0.523 all run).
         evaluations = client.node.create_publisher(Evaluation, "/evaluations", qos.RECORDS)
-        assert client.spin_until(lambda: evaluations.get_subscription_count() > 0)
+        assert client.spin_until(lambda: client.heard_by("/evaluations", "human_input"))
         start = len(term.output())
         evaluations.publish(Evaluation(movement_index=5, mean_distance=0.321, outcome_size=2,
                                        goals=[0.0, 0.0], reached=[0.1, 0.1],
