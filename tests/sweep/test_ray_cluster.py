@@ -27,9 +27,11 @@ from tests.sweep.ray_cluster import LocalCluster
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
 RUN_SWEEP = str(REPO / "ros_ws" / "run_sweep.sh")
-# 2 settings x 2 seeds x 100 movements
-SWEEP = {"movements": 100, "eval_every": 50, "seeds": 2, "learner": "sgim-d",
-         "period": [50, 150], "run_timeout": 600}
+# 2 seeds x 100 movements: a run for each node, and one to lose with the worker. (A list of
+# settings multiplies the runs, which tests/sweep/test_sweep_file.py checks without Ray.)
+SWEEP = {"movements": 100, "eval_every": 50, "seeds": 2, "learner": "sgim-d", "period": 50,
+         "run_timeout": 600}
+RUNS = 2
 SWEEP_TIMEOUT = 1500  # seconds; a 100-movement run takes about 35 s on 2 loaded cores
 
 
@@ -90,7 +92,7 @@ def made_once(runs: Path, spec: RunSpec) -> dict:
 def check_results(tmp_path: Path) -> dict[str, dict]:
     runs = tmp_path / "runs"
     specs = load(sweep_file(tmp_path), runs).runs
-    assert len(specs) == 4
+    assert len(specs) == RUNS
     made = {spec.name: made_once(runs, spec) for spec in specs}
     listed = sorted(p.name for p in runs.iterdir() if not p.name.startswith("."))
     assert listed == sorted([*made, results.STATUS_FILE]), "one folder per run, nothing else"
@@ -134,7 +136,7 @@ def test_a_sweep_on_two_nodes_uses_both_and_lands_every_run_once(cluster, tmp_pa
     assert len({pid for _, pid in workers}) >= 2, "two nodes, two worker processes at least"
     assert all(record["attempts"] == 1 for record in made.values())
     assert domains_never_shared(tmp_path / "runs", list(made)) >= 1, "no two runs at once"
-    assert "4/4 runs finished" in output
+    assert f"{RUNS}/{RUNS} runs finished" in output
     nothing_left(tmp_path)
 
 
@@ -158,5 +160,5 @@ def test_losing_the_worker_mid_sweep_still_makes_every_run_once(cluster, tmp_pat
     assert made[victim]["attempts"] >= 2, made[victim]
     assert made[victim]["node"]["label"] == "head"
     counts = results.read_yaml(status_file)["counts"]
-    assert counts["finished"] == 4 and counts["failed"] == 0 and counts["retried"] >= 1
+    assert counts["finished"] == RUNS and counts["failed"] == 0 and counts["retried"] >= 1
     nothing_left(tmp_path, lost=True)
