@@ -5,9 +5,9 @@
 #   ./test.sh            the whole suite, on every core: one pytest-xdist worker per core
 #                        (SGIM_TEST_WORKERS=N for another count), each in a ROS domain of its
 #                        own; a worker takes whole test files, the longest first
-#                        (tests/scheduling.py). About 10 minutes on 2 cores from a clean clone.
+#                        (tests/scheduling.py).
 #   ./test.sh --quick    the developer's loop: the pure-Python tests only (not marked ros or
-#                        slow), on every core; no ROS graph or node is started. About 2 minutes.
+#                        slow), on every core; no ROS graph or node is started.
 #   ./test.sh ARGS...    extra arguments go to pytest, e.g. ./test.sh tests/core -x;
 #                        -n 0 runs in this one process (pdb, -s, reading the order of events).
 #   ./test.sh --quick ARGS...   both.
