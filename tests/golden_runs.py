@@ -56,8 +56,9 @@ def bag_digest(movements) -> str:
     return movements_digest((m.action, m.process, m.status, m.outcome) for m in movements)
 
 
-def runner_records(learner: str, seed: int = SEED, **teacher) -> list[dict]:
-    """The runner's records of the reference run of ``learner``."""
+def runner_records(learner: str, seed: int = SEED, movements: int = MOVEMENTS,
+                   eval_every: int = EVAL_EVERY, **teacher) -> list[dict]:
+    """The runner's records of the reference run of ``learner`` (or of another budget)."""
     from sgim_nodes.core.learners import make_learner
     from sgim_nodes.core.runner import build_world, run
 
@@ -65,6 +66,6 @@ def runner_records(learner: str, seed: int = SEED, **teacher) -> list[dict]:
     made = make_learner(learner, world.env.action_dim, world.env.outcome_dim, seed,
                         scale=world.scale)
     records: list[dict] = []
-    run(made, world, MOVEMENTS, EVAL_EVERY, seed, records.append, teacher_period=PERIOD,
+    run(made, world, movements, eval_every, seed, records.append, teacher_period=PERIOD,
         teacher_tolerance_noise=TOLERANCE.get(learner, 1.0), **teacher)
     return records

@@ -2,7 +2,8 @@
 
 Thin by design: validation and physics live in fishing_world; this node translates the
 request, stamps the result and publishes every executed movement on `movements` for the
-recorder. Bad input is answered with STATUS_INVALID_ACTION and a message, never a crash, and
+recorder. Movement k is cast with the k-th noise of the seed's stream, also after a restart
+(noise_cursor.py). Bad input is answered with STATUS_INVALID_ACTION and a message, never a crash, and
 is not published (nothing was executed).
 
 Interfaces:
@@ -25,6 +26,7 @@ from sgim_ros.entry import run_node
 from sgim_ros.params import Bounds, Param, declare, non_negative, seed_range
 from sgim_ros.record_key import from_environment, movement_signature
 from sim_bridge.fishing_world import DEFAULT_NOISE, DEFAULT_TIME_STEP, FishingWorld
+from sim_bridge.noise_cursor import NoiseCursor
 
 PARAMS = (  # all read-only: they are the run's physics, recorded in its metadata
     Param("seed", 0, "seed of the motor-command noise; same seed, same outcomes", seed_range),
@@ -46,6 +48,9 @@ class SimBridgeNode(Node):
         super().__init__("sim_bridge")
         p = declare(self, PARAMS)
         self.world = FishingWorld(seed=p["seed"], noise=p["noise"], time_step=p["time_step"])
+        # Movement k gets the k-th noise of the seed's stream, even after a restart, a resume
+        # or a re-execution: the same seed's uninterrupted run's noise (noise_cursor.py).
+        self.cursor = NoiseCursor(self.world)
         self.executed = 0
         self._key = from_environment()  # the run's record key (sgim_ros/record_key.py)
         self._movements = self.create_publisher(Movement, "movements", qos.RECORDS)
@@ -77,7 +82,8 @@ class SimBridgeNode(Node):
                                    "serving execute_action")
 
     def _execute(self, request: ExecuteAction.Request, response: ExecuteAction.Response):
-        result = self.world.execute(np.asarray(request.action, dtype=float))
+        result = self.cursor.execute(np.asarray(request.action, dtype=float),
+                                     request.movement_index if request.record else None)
         response.status = int(result.status)
         response.message = result.message
         if result.outcome is not None:

@@ -75,6 +75,12 @@ def test_a_killed_simulator_is_restarted_and_no_movement_is_lost_or_doubled(
     assert len(raw) - 200 <= 1 and raw[-1] == 200
     meta = yaml.safe_load((tmp_path / "sim-kill" / "metadata.yaml").read_text())
     assert meta["restarts"] == {"sim_bridge": 1} and meta["outcome"] == "finished"
+    # And they are the uninterrupted run's: the restarted simulator casts movement k with the
+    # k-th noise of its seed (sim_bridge/noise_cursor.py), not its stream's first.
+    from tests.golden_runs import bag_digest, runner_digest, runner_records
+
+    assert bag_digest(run.movements) == runner_digest(
+        runner_records("saggriac", 4, movements=200, eval_every=0))
 
 
 def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
