@@ -46,8 +46,9 @@ def test_a_block_the_page_lacks_is_named():
 def test_banner_goes_under_the_title_and_comes_off_when_fresh(tmp_path):
     text = pages.fill(PAGE, {"provenance": made()}, "p")
     marked = pages.with_banner(text, pages.banner("x", pages.provenance_of(text, "x"),
-                                                  "b" * 16, "made with another"))
+                                                  "b" * 16))
     assert marked.startswith("# A page\n\n<!-- stale x: begin -->\n> **Stale.**")
+    assert f"come from commit {pages.provenance_of(text, 'x').commit} " in marked
     assert "`ros_ws/reproduce.sh x`" in marked and pages.has_banner(marked, "x")
     assert not pages.has_banner(marked, "other")
     path = tmp_path / "page.md"
@@ -57,3 +58,9 @@ def test_banner_goes_under_the_title_and_comes_off_when_fresh(tmp_path):
     assert not pages.has_banner(fresh, "x")
     assert pages.freshness(path, "x", "b" * 16).fresh
     assert not pages.freshness(path, "x", "c" * 16).fresh
+
+
+def test_a_page_never_made_says_so_not_that_it_is_stale():
+    never = pages.with_banner(PAGE, pages.banner("x", None, "b" * 16))
+    assert "**Not made yet.**" in never and "**Stale.**" not in never
+    assert "`ros_ws/reproduce.sh x`" in never and pages.has_banner(never, "x")

@@ -105,12 +105,12 @@ def check(experiments: list[Experiment], mark: bool) -> int:
             if pages.has_banner(text, exp.name):
                 continue
             if mark:
-                banner = pages.banner(exp.name, state.made, expected, state.why())
+                banner = pages.banner(exp.name, state.made, expected)
                 path.write_text(pages.with_banner(text, banner), encoding="utf-8")
-                print(f"{page}: marked stale ({exp.name}: {state.why()})")
+                print(f"{page}: marked stale ({exp.name}: the page {state.why()})")
                 continue
             print(f"{page}: stale and not marked: {exp.name}'s learner fingerprint is "
-                  f"{expected} today, the page was {state.why()}. Make it again "
+                  f"{expected} today; the page {state.why()}. Make it again "
                   f"(ros_ws/reproduce.sh {exp.name}) or mark it (ros_ws/reproduce.sh "
                   "--mark-stale)")
             problems += 1

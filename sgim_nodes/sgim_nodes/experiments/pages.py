@@ -73,14 +73,19 @@ def provenance_of(text: str, experiment: str) -> Provenance | None:
     return None
 
 
-def banner(experiment: str, made: Provenance | None, expected: str, why: str) -> str:
-    made_by = (f"commit {made.commit} (learner fingerprint `{made.fingerprint}`)" if made
-               else "an earlier version")
-    return (f"<!-- stale {experiment}: begin -->\n"
-            f"> **Stale.** The figures of this page come from {made_by}; the learner has "
-            f"changed since ({why}: today's fingerprint is `{expected}`), so they may differ "
-            f"from what today's code makes. `ros_ws/reproduce.sh {experiment}` makes them "
-            f"again.\n\n<!-- stale {experiment}: end -->\n")
+def banner(experiment: str, made: Provenance | None, expected: str) -> str:
+    """What a stale page says under its title: which code made its figures, or that today's
+    code has not made them yet."""
+    if made is None:
+        said = (f"> **Not made yet.** Today's code (learner fingerprint `{expected}`) has not "
+                f"made this page's generated parts. `ros_ws/reproduce.sh {experiment}` makes "
+                "them.")
+    else:
+        said = (f"> **Stale.** The figures of this page come from commit {made.commit} "
+                f"(learner fingerprint `{made.fingerprint}`); the learner has changed since "
+                f"(today's fingerprint is `{expected}`), so they may differ from what today's "
+                f"code makes. `ros_ws/reproduce.sh {experiment}` makes them again.")
+    return f"<!-- stale {experiment}: begin -->\n{said}\n\n<!-- stale {experiment}: end -->\n"
 
 
 def has_banner(text: str, experiment: str) -> bool:
@@ -114,8 +119,8 @@ class Freshness:
 
     def why(self) -> str:
         if self.made is None:
-            return "it holds no provenance of this experiment"
-        return f"made with fingerprint {self.made.fingerprint} at commit {self.made.commit}"
+            return "holds no provenance of this experiment"
+        return f"was made with fingerprint {self.made.fingerprint} at commit {self.made.commit}"
 
 
 def freshness(page: Path, experiment: str, expected: str) -> Freshness:
