@@ -3,8 +3,8 @@
 Thin by design: validation and physics live in fishing_world; this node translates the
 request, stamps the result and publishes every executed movement on `movements` for the
 recorder. Movement k is cast with the k-th noise of the seed's stream, also after a restart
-(noise_cursor.py). Bad input is answered with STATUS_INVALID_ACTION and a message, never a crash, and
-is not published (nothing was executed).
+(noise_cursor.py). Bad input is answered with STATUS_INVALID_ACTION and a message, never a
+crash, and is not published (nothing was executed).
 
 Interfaces:
   service  execute_action (sgim_msgs/srv/ExecuteAction)
