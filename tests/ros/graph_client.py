@@ -37,6 +37,17 @@ class GraphClient:
         assert self.spin_until(future.done, timeout), "service call timed out"
         return future.result()
 
+    def try_call(self, client, request, timeout: float):
+        """The answer, or None when none came in `timeout`. Right after discovery a reply can
+        be lost: the server's reply writer may not have matched this client's reader yet
+        (Fast DDS logs "failed to send response (timeout)"), though the request went through.
+        Only for calls that may be made again."""
+        future = client.call_async(request)
+        if self.spin_until(future.done, timeout):
+            return future.result()
+        client.remove_pending_request(future)
+        return None
+
     def capture(self, msg_type, topic: str, qos) -> list:
         received: list = []
         self.node.create_subscription(msg_type, topic, received.append, qos)

@@ -54,7 +54,8 @@ def test_a_job_spans_goals_up_to_its_cap_its_goal_count_or_a_cancel(ros_processe
     chooser = client.node.create_client(ChooseGoal, "/choose_goal")
     assert chooser.wait_for_service(timeout_sec=60)
     for _ in range(100):
-        assert client.call(chooser, ChooseGoal.Request()).ok
+        answer = client.try_call(chooser, ChooseGoal.Request(), timeout=5.0)
+        assert answer is None or answer.ok  # a probe's reply may be lost: probe again
         if client.spin_until(lambda: bool(goals), 0.5):
             break
     assert goals, "the goal generator's goals never reached the test"
