@@ -39,7 +39,7 @@ GROUPS: dict[str, tuple[str, ...]] = {
 SECONDS: dict[str, float] = {
     "ray": 248,
     "tests/ros/test_graph_runs.py::test_learner_through_the_graph": 174,
-    "tests/core/test_learners.py::test_goal_babbling_beats_random_on_the_twenty_joint_arm": 81,
+    "tests/core/test_learners.py::test_goal_babbling_beats_random_on_the_twenty_joint_arm": 34,
     "tests/ros/test_faults.py::test_an_interrupted_run_resumes_from_its_recording_to_the_"
     "same_final_count": 72,
     "tests/experiments/test_reproduce_graph.py": 70,
