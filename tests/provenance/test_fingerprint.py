@@ -96,3 +96,29 @@ def test_the_provenance_block_reads_back():
     assert Provenance.parse(text) == p
     assert "1 h 02 min on" in text and "| note | a note |" in text
     assert Provenance.parse("no block here") is None
+
+
+def test_a_reports_own_pages_and_figures_do_not_make_the_tree_dirty(tmp_path):
+    """The study report draws its figures and writes one page before the next page's block is
+    made: those writes are the command's output, not a change of the code that made it."""
+    import subprocess
+
+    from sgim_nodes.provenance.record import git_state
+
+    def git(*args: str) -> None:
+        subprocess.run(["git", "-C", str(tmp_path), *args], check=True, capture_output=True)
+
+    (tmp_path / "docs" / "figures").mkdir(parents=True)
+    for name in ("code.py", "docs/results.md", "docs/figures/curve.png"):
+        (tmp_path / name).write_text("before\n")
+    git("init", "-q")
+    git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qam", "x", "--allow-empty")
+    git("add", ".")
+    git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "files")
+    outputs = ["docs/results.md", "docs/figures"]
+    (tmp_path / "docs" / "results.md").write_text("after\n")
+    (tmp_path / "docs" / "figures" / "curve.png").write_text("after\n")
+    assert git_state(tmp_path, outputs)[1] is False
+    assert git_state(tmp_path)[1] is True
+    (tmp_path / "code.py").write_text("after\n")
+    assert git_state(tmp_path, outputs)[1] is True

@@ -176,7 +176,9 @@ def reproduce(exp: Experiment, args: argparse.Namespace, command: str) -> int:
     report = maker(exp.report)(exp, runs_dir, FIGURES)
     wall = time.monotonic() - began
     notes = [*report.notes, f"runs in `{_shown(runs_dir)}`"]
-    made = Provenance.now(command, exp.name, exp.fingerprint(), environment(), wall, notes)
+    outputs = [*exp.pages, _shown(FIGURES)]  # what this command writes is not a change
+    made = Provenance.now(command, exp.name, exp.fingerprint(), environment(), wall, notes,
+                          outputs=outputs)
     for page in exp.pages:
         blocks = dict(report.blocks.get(page, {}))
         blocks["provenance"] = made.markdown()

@@ -10,6 +10,7 @@ import os
 import platform
 import re
 import subprocess
+from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -22,14 +23,17 @@ BEGIN, END = "<!-- provenance: begin -->", "<!-- provenance: end -->"
 _DATA = re.compile(r"<!-- provenance-data: (?P<data>.*?) -->")
 
 
-def git_state(repo: Path = REPO) -> tuple[str, bool]:
-    """(short commit, whether tracked files differ from it); ("unknown", False) outside git."""
+def git_state(repo: Path = REPO, outputs: Iterable[str] = ()) -> tuple[str, bool]:
+    """(short commit, whether tracked files differ from it); ("unknown", False) outside git.
+    `outputs` (paths in the repository) do not count: a report's own pages and figures, which
+    it writes before it is done, are not changes of the code that made it."""
     try:
         commit = subprocess.run(["git", "-C", str(repo), "rev-parse", "--short=9", "HEAD"],
                                 capture_output=True, text=True, timeout=10).stdout.strip()
+        ignored = [f":(exclude){path}" for path in outputs]
         status = subprocess.run(["git", "-C", str(repo), "status", "--porcelain",
-                                 "--untracked-files=no"], capture_output=True, text=True,
-                                timeout=30).stdout.strip()
+                                 "--untracked-files=no", "--", ".", *ignored],
+                                capture_output=True, text=True, timeout=30).stdout.strip()
     except (OSError, subprocess.SubprocessError):
         return "unknown", False
     return (commit or "unknown"), bool(commit and status)
@@ -76,9 +80,9 @@ class Provenance:
 
     @classmethod
     def now(cls, command: str, experiment: str, fingerprint: str,
-            environment: dict[str, str], wall_s: float, notes: list[str] | None = None
-            ) -> Provenance:
-        commit, dirty = git_state()
+            environment: dict[str, str], wall_s: float, notes: list[str] | None = None,
+            outputs: Iterable[str] = ()) -> Provenance:
+        commit, dirty = git_state(outputs=outputs)
         return cls(command, experiment, fingerprint, dict(environment), commit, dirty,
                    machine(), datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
                    round(float(wall_s), 1), os.cpu_count() or 1, list(notes or []))
