@@ -64,3 +64,20 @@ def test_a_page_never_made_says_so_not_that_it_is_stale():
     never = pages.with_banner(PAGE, pages.banner("x", None, "b" * 16))
     assert "**Not made yet.**" in never and "**Stale.**" not in never
     assert "`ros_ws/reproduce.sh x`" in never and pages.has_banner(never, "x")
+
+
+def test_a_studys_wall_time_is_its_runs_span_not_the_reports():
+    """Made again from finished runs, a report takes seconds: the study's wall time is the
+    span of its runs' metadata, from the first start to the last end."""
+    from types import SimpleNamespace
+
+    from sgim_nodes.experiments.reports.study import wall_span
+
+    def run(started: str, ended: str):
+        return SimpleNamespace(metadata={"started": started, "ended": ended})
+
+    study = SimpleNamespace(runs=[run("2026-12-04T17:00:00+00:00", "2026-12-04T17:03:00+00:00"),
+                                  run("2026-12-04T17:01:00+00:00", "2026-12-04T18:10:00+00:00")])
+    assert wall_span(study) == 70 * 60
+    study.runs.append(SimpleNamespace(metadata={"started": "2026-12-04T17:00:00+00:00"}))
+    assert wall_span(study) is None  # a run that does not say: no span rather than a wrong one

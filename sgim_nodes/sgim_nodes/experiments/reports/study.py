@@ -49,8 +49,10 @@ def make(experiment: Experiment, runs_dir: Path, figures_dir: Path) -> Report:
     report.add(page, "cost", cost(study))
     report.add(readme, "summary", summary(numbers))
     durations = [r.duration_s for r in study.runs if r.duration_s]
+    span = wall_span(study)
     report.notes.append(f"{len(study.runs)} runs through the graph, {sum(durations) / 3600:.1f}"
-                        " h of run time in all")
+                        " h of run time in all"
+                        + (f", {span / 3600:.1f} h from first start to last end" if span else ""))
     return report
 
 
@@ -193,9 +195,25 @@ def cost(study: Study) -> str:
             rows.append([NAMES.get(learner, learner), str(len(d)),
                          f"{np.mean(d):.0f}", f"{min(d):.0f}-{max(d):.0f}"])
     total = sum(r.duration_s or 0.0 for r in study.runs)
+    span = wall_span(study)
+    made_in = (f", made in {span / 3600:.1f} h of wall time (the first run's start to the last "
+               "run's end)" if span else "")
     return "\n".join(table(["learner", "runs", "mean run time (s)", "range (s)"], rows)) + (
-        f"\n\n{total / 3600:.1f} h of run time in all; the wall time and the cores it ran on "
-        "are in the provenance block at the top.")
+        f"\n\n{total / 3600:.1f} h of run time in all{made_in}, on the machine and cores of "
+        "the provenance block at the top.")
+
+
+def wall_span(study: Study) -> float | None:
+    """Seconds from the first run's start to the last run's end, from their metadata; None
+    when a run does not say (the report may be made long after the runs)."""
+    from datetime import datetime
+
+    try:
+        starts = [datetime.fromisoformat(r.metadata["started"]) for r in study.runs]
+        ends = [datetime.fromisoformat(r.metadata["ended"]) for r in study.runs]
+    except (KeyError, TypeError, ValueError):
+        return None
+    return (max(ends) - min(starts)).total_seconds() if starts else None
 
 
 def summary(numbers: StudyNumbers) -> str:
