@@ -71,7 +71,7 @@ def test_a_studys_wall_time_is_its_runs_span_not_the_reports():
     span of its runs' metadata, from the first start to the last end."""
     from types import SimpleNamespace
 
-    from sgim_nodes.experiments.reports.study import wall_span
+    from sgim_nodes.experiments.reports.graph_study import wall_span
 
     def run(started: str, ended: str):
         return SimpleNamespace(metadata={"started": started, "ended": ended})

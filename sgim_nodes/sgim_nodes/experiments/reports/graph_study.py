@@ -3,6 +3,7 @@ run the experiment's file makes with today's learner."""
 
 from __future__ import annotations
 
+from datetime import datetime
 from pathlib import Path
 
 from sgim_nodes.analysis.pooling import check_alike, run_fingerprint
@@ -37,3 +38,24 @@ def load(experiment: Experiment, runs_dir: Path) -> Study:
     study.repeated_seeds = group_runs(study.runs, warn=lambda message: None)
     check_alike(study)
     return study
+
+
+def wall_span(study: Study) -> float | None:
+    """Seconds from the first run's start to the last run's end, from their metadata; None
+    when a run does not say (the report may be made long after the runs)."""
+    try:
+        starts = [datetime.fromisoformat(r.metadata["started"]) for r in study.runs]
+        ends = [datetime.fromisoformat(r.metadata["ended"]) for r in study.runs]
+    except (KeyError, TypeError, ValueError):
+        return None
+    return (max(ends) - min(starts)).total_seconds() if starts else None
+
+
+def run_time_note(study: Study) -> str:
+    """The provenance note of a graph experiment's runs: how many, their run time and the
+    span they were made in (the report itself may be made again in seconds)."""
+    durations = [r.duration_s for r in study.runs if r.duration_s]
+    span = wall_span(study)
+    return (f"{len(study.runs)} runs through the graph, {sum(durations) / 3600:.1f} h of run "
+            "time in all" + (f", {span / 3600:.1f} h from first start to last end" if span
+                             else ""))

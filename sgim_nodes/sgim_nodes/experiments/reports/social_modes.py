@@ -19,7 +19,7 @@ from sgim_nodes.analysis.report import (
 from sgim_nodes.analysis.statistics import compare_groups, coverage_tests, demonstration_times
 from sgim_nodes.experiments.pinned import Experiment
 from sgim_nodes.experiments.reports import Report
-from sgim_nodes.experiments.reports.graph_study import load
+from sgim_nodes.experiments.reports.graph_study import load, run_time_note
 from sgim_nodes.experiments.reports.study import own_runs
 
 PAPER = "sgim-d"
@@ -91,7 +91,5 @@ def make(experiment: Experiment, runs_dir: Path, figures_dir: Path) -> Report:
     report.add(page, "error-tests", pairwise_markdown(list(tests.values())))
     report.add(page, "pond-tests", isolated_tests_table(list(pond.values())))
     durations = [r.duration_s for r in study.runs if r.duration_s]
-    report.notes.append(f"{len(study.runs)} runs through the graph, "
-                        f"{sum(durations) / 3600:.1f} h of run time in all (mean "
-                        f"{np.mean(durations):.0f} s per run)")
+    report.notes.append(f"{run_time_note(study)} (mean {np.mean(durations):.0f} s per run)")
     return report

@@ -25,7 +25,7 @@ from sgim_nodes.analysis.statistics import ALPHA, PairTest, demonstration_times
 from sgim_nodes.analysis.study import Study
 from sgim_nodes.experiments.pinned import Experiment
 from sgim_nodes.experiments.reports import Report
-from sgim_nodes.experiments.reports.graph_study import load
+from sgim_nodes.experiments.reports.graph_study import load, run_time_note, wall_span
 
 NEAR = 0.1
 """A benchmark goal is near a demonstration within this distance (outcome units) of a
@@ -48,11 +48,7 @@ def make(experiment: Experiment, runs_dir: Path, figures_dir: Path) -> Report:
     report.add(page, "findings", findings(numbers, groups))
     report.add(page, "cost", cost(study))
     report.add(readme, "summary", summary(numbers))
-    durations = [r.duration_s for r in study.runs if r.duration_s]
-    span = wall_span(study)
-    report.notes.append(f"{len(study.runs)} runs through the graph, {sum(durations) / 3600:.1f}"
-                        " h of run time in all"
-                        + (f", {span / 3600:.1f} h from first start to last end" if span else ""))
+    report.notes.append(run_time_note(study))
     return report
 
 
@@ -201,19 +197,6 @@ def cost(study: Study) -> str:
     return "\n".join(table(["learner", "runs", "mean run time (s)", "range (s)"], rows)) + (
         f"\n\n{total / 3600:.1f} h of run time in all{made_in}, on the machine and cores of "
         "the provenance block at the top.")
-
-
-def wall_span(study: Study) -> float | None:
-    """Seconds from the first run's start to the last run's end, from their metadata; None
-    when a run does not say (the report may be made long after the runs)."""
-    from datetime import datetime
-
-    try:
-        starts = [datetime.fromisoformat(r.metadata["started"]) for r in study.runs]
-        ends = [datetime.fromisoformat(r.metadata["ended"]) for r in study.runs]
-    except (KeyError, TypeError, ValueError):
-        return None
-    return (max(ends) - min(starts)).total_seconds() if starts else None
 
 
 def summary(numbers: StudyNumbers) -> str:
