@@ -33,9 +33,9 @@ class GraphClient:
             self.executor.spin_once(timeout_sec=0.05)
 
     def call(self, client, request, timeout: float = DEFAULT_TIMEOUT):
-        future = client.call_async(request)
-        assert self.spin_until(future.done, timeout), "service call timed out"
-        return future.result()
+        answer = self.try_call(client, request, timeout)
+        assert answer is not None, "service call timed out"
+        return answer
 
     def try_call(self, client, request, timeout: float):
         """The answer, or None when none came in `timeout`. Right after discovery a reply can
