@@ -108,6 +108,32 @@ def critical_path(run, start: int, end: int) -> str:
             f"{median(new)}; a goal chosen {median(chosen)} after the movement before it")
 
 
+EXECUTOR = "rclpy/executors.py"
+"""rclpy's Python executor: its wait-set rebuild at every wake-up is what the nodes on the
+SingleThreadedExecutor (those that await, sgim_ros/entry.py make_executor) pay per message."""
+
+
+def profile_shares(folder: Path) -> list[str]:
+    """Per node profile: its thread's CPU, the share inside rclpy's Python executor (the
+    wait set it rebuilds at every wake-up) and the share in pybullet's calls (the physics);
+    the rest is the node's own work and the messages' conversion and middleware calls."""
+    import pstats
+
+    lines = []
+    for path in sorted(folder.glob("*.prof")):
+        stats = pstats.Stats(str(path)).stats  # type: ignore[attr-defined]
+        total = sum(own for _, _, own, _, _ in stats.values())
+        executor = sum(cum for (file, _, func), (_, _, _, cum, _) in stats.items()
+                       if file.endswith(EXECUTOR) and func == "_wait_for_ready_callbacks")
+        physics = sum(own for (file, _, func), (_, _, own, _, _) in stats.items()
+                      if file == "~" and "pybullet" in func)
+        shares = [f"{100 * part / total:3.0f} %" if total else "  - "
+                  for part in (executor, physics, total - executor - physics)]
+        lines.append(f"{path.stem:20s} {total:6.2f} s: rclpy executor {shares[0]}, "
+                     f"physics {shares[1]}, the rest {shares[2]}")
+    return lines
+
+
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--learner", default="sgim-d")
@@ -194,7 +220,12 @@ def main() -> int:
         print(f"critical path (medians, movements {a + 1}-{b + 1}): "
               f"{critical_path(run, a + 1, b + 1)}")
     if args.profile:
-        print(f"profiles (cProfile, by own time): {out / 'graph' / 'logs' / 'profile'}")
+        folder = out / "graph" / "logs" / "profile"
+        print("where each node's spinning thread spends its CPU (cProfile on thread CPU; "
+              "profiling inflates Python's share):")
+        for line in profile_shares(folder):
+            print(f"  {line}")
+        print(f"profiles: {folder}")
     print(f"outputs in {out}")
     return 0
 
