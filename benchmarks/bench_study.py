@@ -10,12 +10,19 @@ does the same learning with no messaging at all.
 
     source ros_ws/env.sh && python benchmarks/bench_study.py
     source ros_ws/env.sh && python benchmarks/bench_study.py --seeds 1 --movements 500
+
+`--made DIR` makes no run: it gives the same figures for the graph runs of an experiment made
+already (say runs/experiments/study, by `ros_ws/reproduce.sh study`), from their logs' cast
+counts and their metadata's start and end, with one cast's CPU measured now. Its wall time
+is the time at least one of its runs was running (so a pause between two sittings of a resumed
+experiment does not count), and its cores those of this machine.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import re
 import resource
 import subprocess
@@ -85,6 +92,46 @@ def made_casts(run_dir: Path, movements: int) -> int:
     return total
 
 
+def busy_seconds(spans: list[tuple[float, float]]) -> float:
+    """The length of the union of (start, end) spans: the wall time something was running."""
+    total, reach = 0.0, float("-inf")
+    for start, end in sorted(spans):
+        if end > reach:
+            total += end - max(start, reach)
+            reach = end
+    return total
+
+
+def made_study(runs: Path, cores: int) -> int:
+    """--made: the casts, wall time and efficiency of an experiment's graph runs, made already."""
+    from datetime import datetime
+
+    import yaml
+
+    spans, casts, folders = [], 0, []
+    for meta_path in sorted(runs.glob("*/metadata.yaml")):
+        meta = yaml.safe_load(meta_path.read_text())
+        if meta.get("outcome") != "finished" or not meta.get("started") or not meta.get("ended"):
+            continue
+        folders.append(meta_path.parent.name)
+        spans.append((datetime.fromisoformat(meta["started"]).timestamp(),
+                      datetime.fromisoformat(meta["ended"]).timestamp()))
+        casts += made_casts(meta_path.parent, int(meta.get("movements_done", 0)))
+    if not folders:
+        raise SystemExit(f"no finished graph run (metadata.yaml, outcome finished) in {runs}")
+    cost = cast_cost()
+    wall = busy_seconds(spans)
+    physics = casts * cost
+    run_time = sum(end - start for start, end in spans)
+    print(f"{len(folders)} finished runs in {runs}; one cast {1000 * cost:.2f} ms of CPU "
+          "(measured now)")
+    print(f"wall {wall / 3600:.2f} h (some run running), run time {run_time / 3600:.2f} h "
+          f"({run_time / wall:.2f} runs at a time), casts {casts} ({casts / wall:.1f}/s), "
+          f"physics {physics / 3600:.2f} h, efficiency {physics / (cores * wall):.2f} on "
+          f"{cores} cores")
+    return 0
+
+
 def run_side_by_side(commands: list[list[str]], parallel: int) -> float:
     """Run the commands, `parallel` at a time; the wall time."""
     start = time.perf_counter()
@@ -150,7 +197,13 @@ def main() -> int:
     p.add_argument("--movements", type=int, default=2000)
     p.add_argument("--parallel", type=int, default=2, help="runs side by side (the cores)")
     p.add_argument("--graph-only", action="store_true")
+    p.add_argument("--made", type=Path, metavar="DIR",
+                   help="make no run: the figures of the graph runs in DIR, made already")
     args = p.parse_args()
+    if args.made is not None:
+        if not args.made.is_dir():
+            p.error(f"--made: no folder {args.made}")
+        return made_study(args.made, os.cpu_count() or 1)
     if args.seeds < 1 or args.movements < 1 or args.parallel < 1:
         p.error("--seeds, --movements and --parallel must be >= 1")
     out = Path(tempfile.mkdtemp(prefix="bench-study-"))
