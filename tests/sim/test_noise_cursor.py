@@ -65,3 +65,26 @@ def test_a_refused_action_draws_no_noise(actions, uninterrupted):
         refused = cast(cursor, np.full(24, 5.0), 1)
         assert refused[1] is None and cursor.casts == 0
         assert [cast(cursor, a, k) for k, a in enumerate(actions[:2], 1)] == uninterrupted[:2]
+
+
+def test_a_movement_far_ahead_is_refused_at_once_and_draws_nothing(actions, uninterrupted):
+    """A forged index (the live-node fuzzer's 40,427,983 held the simulator half a minute per
+    request) is answered at once as a bad action; the run's own next movement is unchanged."""
+    import time
+
+    from sim_bridge.fishing_world import Status
+    from sim_bridge.noise_cursor import MAX_SKIP
+
+    with FishingWorld(seed=SEED) as world:
+        cursor = NoiseCursor(world)
+        assert [cast(cursor, a, k) for k, a in enumerate(actions[:2], 1)] == uninterrupted[:2]
+        start = time.process_time()
+        for index in (40_427_983, 2**32 - 1, MAX_SKIP + 4):
+            result = cursor.execute(actions[2], index)
+            assert result.status == Status.INVALID_ACTION and result.outcome is None
+            assert f"movement {index} is" in result.message and "ahead" in result.message
+        assert time.process_time() - start < 5  # drawing 40 million casts' noise takes ~30 s
+        assert cursor.casts == 2
+        assert cast(cursor, actions[2], 3) == uninterrupted[2]
+        # Within reach (MAX_SKIP casts ahead of cast 2) is served: a deep restart.
+        assert cursor.execute(actions[3], MAX_SKIP + 3).status != Status.INVALID_ACTION
