@@ -25,6 +25,7 @@ from typing import Any
 
 import yaml
 
+from sgim_ros.clip import value_text
 from sgim_ros.params import ParameterError
 
 # Parameters rclpy declares on every node by itself.
@@ -111,8 +112,7 @@ class StrictLoader(yaml.SafeLoader):
 
 
 def _key(key: Any) -> str:
-    text = repr(key)
-    return text if len(text) <= 60 else text[:57] + "..."
+    return value_text(key, 60)
 
 
 def parse_yaml(text: str | bytes) -> Any:

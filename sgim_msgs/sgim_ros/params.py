@@ -24,6 +24,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from sgim_ros.clip import value_text
+
 INT_MAX = 2**63 - 1
 FLOAT_MAX = sys.float_info.max
 SEED_MAX = 2**32 - 1
@@ -102,7 +104,7 @@ seed_range = Bounds(0, SEED_MAX)
 def seed_problem(value: Any) -> str | None:
     """Why `value` is not a seed of a run, or None: for command lines that take one."""
     if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= SEED_MAX:
-        return f"a seed is an integer in 0..{SEED_MAX} (2**32 - 1), got {_shown(value)}"
+        return f"a seed is an integer in 0..{SEED_MAX} (2**32 - 1), got {value_text(value)}"
     return None
 
 
@@ -133,7 +135,7 @@ class DataFile:
         try:
             found = self.content(path) if self.content is not None else None
         except Exception as error:  # a format check that did not foresee this content
-            found = f"unreadable ({type(error).__name__}: {_shown(str(error))})"
+            found = f"unreadable ({type(error).__name__}: {value_text(str(error))})"
         return None if found is None else f"not {self.what}: {found}"
 
     def __call__(self, value: str) -> bool:
@@ -173,7 +175,7 @@ class Param:
         if not isinstance(value, expected) or (expected is int and isinstance(value, bool)):
             raise ParameterError(
                 f"parameter '{self.name}' must be of type {expected.__name__}, "
-                f"got {_shown(value)} ({type(value).__name__})"
+                f"got {value_text(value)} ({type(value).__name__})"
             )
         problem = _universal_problem(value)
         if problem is None and isinstance(self.check, DataFile):
@@ -181,7 +183,7 @@ class Param:
         elif problem is None and self.check is not None and not self.check(value):
             problem = f"it must be {self.rule}"
         if problem is not None:
-            raise ParameterError(f"parameter '{self.name}' = {_shown(value)} is invalid: "
+            raise ParameterError(f"parameter '{self.name}' = {value_text(value)} is invalid: "
                                  f"{problem}")
         if isinstance(self.check, DataFile) and value:
             # Absolute: the launcher checks it where the user named it, and a node (or a
@@ -225,19 +227,6 @@ def _universal_problem(value: Any) -> str | None:
     if isinstance(value, str) and "\0" in value:
         return "it must not hold a NUL character"
     return None
-
-
-def _shown(value: Any, limit: int = 80) -> str:
-    """A value in a message: its repr on one line, cut in the middle to a reasonable size, so
-    that a long path keeps its file name (an integer of thousands of digits has no repr at
-    all: Python refuses to print it)."""
-    if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**40:
-        return f"an integer of {value.bit_length()} bits"
-    text = repr(value)
-    if len(text) <= limit:
-        return text
-    head = (limit - 3) // 2
-    return text[:head] + "..." + text[len(text) - (limit - 3 - head):]
 
 
 def declare(node, params: Sequence[Param]) -> dict[str, Any]:

@@ -55,6 +55,7 @@ from sgim_nodes.graph.description import (
 from sgim_nodes.graph.experiment_options import REPO
 from sgim_nodes.graph.run_folder import run_name_problem
 from sgim_nodes.provenance.fingerprint import Fingerprint
+from sgim_ros.clip import value_text
 from sgim_ros.command_line import YamlProblem, parse_yaml, shown
 from sgim_ros.params import SEED_MAX, ParameterError, seed_problem
 
@@ -219,10 +220,10 @@ def _seeds(value: Any, where: str) -> list[int]:
                              f"{{first: F, count: N}}, got {value!r}")
     if not seeds or any(not isinstance(s, int) or isinstance(s, bool) or s < 0 for s in seeds):
         raise SweepFileError(f"{where}: seeds must be integers >= 0, at least one, got "
-                             f"{_short(value)}")
+                             f"{value_text(value)}")
     if any(seed_problem(s) for s in seeds):
         raise SweepFileError(f"{where}: seeds must be in 0..{SEED_MAX} (2**32 - 1), the "
-                             f"graph's range, got {_short(value)}")
+                             f"graph's range, got {value_text(value)}")
     return seeds
 
 
@@ -231,11 +232,6 @@ def _seed_count(count: int, first: int, where: str) -> None:
     if count > MAX_SEEDS or (count > 0 and first + count - 1 > SEED_MAX):
         raise SweepFileError(f"{where}: seeds must be in 0..{SEED_MAX} (2**32 - 1) and at most "
                              f"{MAX_SEEDS} of them, got {count} from {first}")
-
-
-def _short(value: Any, limit: int = 80) -> str:
-    text = repr(value) if not isinstance(value, int) or abs(value) < 10**40 else "a huge number"
-    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 def _positive_int(value: Any, key: str, where: str, minimum: int = 1) -> int:

@@ -48,6 +48,7 @@ from sgim_nodes.view.picture import (
     PROCESS_NAMES,
     LivePicture,
 )
+from sgim_ros.clip import clipped, value_text
 from teacher.human_commands import (
     CommandError,
     GoalPoint,
@@ -76,16 +77,13 @@ LAND_RGB = (232, 214, 168)
 Answer = dict[str, Any]
 
 
-def clipped(text: str, limit: int = 300) -> str:
-    return text if len(text) <= limit else text[: limit - 3] + "..."
+MESSAGE_LIMIT = 300
+"""The longest message the page shows in one line."""
 
 
 def shown(value: Any, limit: int = 60) -> str:
     """A value sent by a client, for a message: its repr, cut short."""
-    try:
-        return clipped(repr(value), limit)
-    except RecursionError:  # JSON nested about as deep as the interpreter allows
-        return f"a {type(value).__name__} nested too deep to show"
+    return value_text(value, limit)
 
 
 @dataclass
@@ -279,7 +277,7 @@ class WebTeacher:
         try:
             decision, key = self._admit(body)
         except CommandError as error:
-            message = clipped(str(error))
+            message = clipped(str(error), MESSAGE_LIMIT)
             self.say(f"refused: {message}", "error")
             return {"ok": False, "message": message}
         if isinstance(decision, dict):
