@@ -37,6 +37,18 @@ class GraphClient:
         assert answer is not None, "service call timed out"
         return answer
 
+    def ask(self, client, request, timeout: float = DEFAULT_TIMEOUT, attempt: float = 5.0):
+        """`call` for a request that does the same when made twice (a query, a refused or
+        repeated set): made again every `attempt` seconds, since its first reply may be lost
+        (see `try_call`)."""
+        deadline = time.monotonic() + timeout
+        while True:
+            left = deadline - time.monotonic()
+            answer = self.try_call(client, request, min(attempt, max(left, 0.0)))
+            if answer is not None:
+                return answer
+            assert time.monotonic() < deadline, "service call timed out"
+
     def try_call(self, client, request, timeout: float):
         """The answer, or None when none came in `timeout`. Right after discovery a reply can
         be lost: the server's reply writer may not have matched this client's reader yet

@@ -43,10 +43,10 @@ def test_a_job_spans_goals_up_to_its_cap_its_goal_count_or_a_cancel(ros_processe
     # The explorer says it is ready only once it sees the goal generator it calls mid-job.
     ready = client.node.create_client(RecorderReady, "/explorer_ready")
     assert ready.wait_for_service(timeout_sec=60)
-    alone = client.call(ready, RecorderReady.Request())
+    alone = client.ask(ready, RecorderReady.Request())
     assert not alone.ready and "choose_goal" in alone.message
     ros_processes.start("goals", [ROS2RUN, "sgim_nodes", "goal_generator"])
-    assert client.spin_until(lambda: client.call(ready, RecorderReady.Request()).ready, 60)
+    assert client.spin_until(lambda: client.ask(ready, RecorderReady.Request()).ready, 60)
     reach = ActionClient(client.node, ReachGoal, "/reach_goal")
     assert reach.wait_for_server(timeout_sec=60)
     # Likewise the goal generator, started last, must know this test's listener before the

@@ -23,7 +23,7 @@ def _set(client, node: str, **values):
         Parameter(name=name, value=ParameterValue(type=ParameterType.PARAMETER_DOUBLE,
                                                   double_value=value))
         for name, value in values.items()])
-    return client.call(service, request).results
+    return client.ask(service, request).results
 
 
 def _get(client, node: str, name: str):
@@ -32,8 +32,8 @@ def _get(client, node: str, name: str):
     get = client.node.create_client(GetParameters, f"/{node}/get_parameters")
     describe = client.node.create_client(DescribeParameters, f"/{node}/describe_parameters")
     assert get.wait_for_service(timeout_sec=60) and describe.wait_for_service(timeout_sec=60)
-    value = client.call(get, GetParameters.Request(names=[name])).values[0]
-    descriptor = client.call(describe, DescribeParameters.Request(names=[name])).descriptors[0]
+    value = client.ask(get, GetParameters.Request(names=[name])).values[0]
+    descriptor = client.ask(describe, DescribeParameters.Request(names=[name])).descriptors[0]
     return value, descriptor
 
 

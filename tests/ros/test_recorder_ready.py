@@ -26,10 +26,10 @@ def test_recorder_is_ready_only_once_it_hears_the_publishers(ros_processes, rclp
         ready = client.node.create_client(RecorderReady, "/recorder_ready")
         assert ready.wait_for_service(timeout_sec=30)
         ask = RecorderReady.Request(topics=["competences"], publishers=[1])
-        first = client.call(ready, ask)
+        first = client.ask(ready, ask)
         assert not first.ready and "competences (0/1)" in first.message
         client.node.create_publisher(Competence, "/competences", qos.RECORDS)
-        assert client.spin_until(lambda: client.call(ready, ask).ready, timeout=30)
+        assert client.spin_until(lambda: client.ask(ready, ask).ready, timeout=30)
     finally:
         client.close()
 
@@ -67,10 +67,10 @@ def test_the_evaluator_is_ready_only_once_it_hears_the_movements(ros_processes, 
         ready = client.node.create_client(RecorderReady, "/evaluator_ready")
         assert ready.wait_for_service(timeout_sec=60)
         ask = RecorderReady.Request(topics=["movements", "goals"], publishers=[1, 3])
-        first = client.call(ready, ask)
+        first = client.ask(ready, ask)
         assert not first.ready and first.message == "not yet matched: movements (0/1)"
         client.node.create_publisher(Movement, "/movements", qos.RECORDS)
-        assert client.spin_until(lambda: client.call(ready, ask).ready, timeout=30)
+        assert client.spin_until(lambda: client.ask(ready, ask).ready, timeout=30)
     finally:
         client.close()
 
