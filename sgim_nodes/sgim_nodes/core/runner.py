@@ -9,6 +9,7 @@ records in memory.
 Example:
     python -m sgim_nodes.core.runner --learner sgim-d --movements 5000 --seed 3 \
         --env planar-arm --eval-every 250 --output runs/sgimd_3.jsonl
+    (``--learner sgim-acts`` asks its own teachers: core/acts_runner.py)
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ from .help_request import (
     budget_for,
     check_timing,
 )
-from .learners import LEARNER_NAMES, Learner, make_learner
+from .learners import CORE_LEARNER_NAMES, Learner, make_learner
 from .planar_arm import ARMS, PlanarArm, benchmark_goals, teaching_set
 from .random_streams import SEED_MAX, component_rng, world_seed
 from .repeatable_casts import RepeatableCasts
@@ -257,8 +258,11 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         prog="python -m sgim_nodes.core.runner",
         description="Run one learner on one world without ROS and log every movement and "
                     "evaluation as JSON lines (flushed as it goes).")
-    p.add_argument("--learner", choices=LEARNER_NAMES, default="sgim-d",
+    p.add_argument("--learner", choices=CORE_LEARNER_NAMES, default="sgim-d",
                    help="which learner to run (default: %(default)s)")
+    p.add_argument("--strategies", default=None,
+                   help="sgim-acts: comma-separated strategies, e.g. autonomous,mimicry:west "
+                        "(default: autonomous and both social ones of every teacher)")
     p.add_argument("--movements", type=int, default=5000,
                    help="number of movements, the paper's budget is 5000 (default: %(default)s)")
     p.add_argument("--seed", type=int, default=0,
@@ -313,6 +317,8 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         p.error("--eval-every must be >= 0")
     if args.teacher_tolerance_noise < 0:
         p.error("--teacher-tolerance-noise must be >= 0")
+    if args.strategies is not None and args.learner != "sgim-acts":
+        p.error("--strategies needs --learner sgim-acts")
     if args.pond_radius is not None and args.env != "fishing":
         p.error("--pond-radius needs --env fishing")
     if args.learner == "demo-only" and args.timing == ON_REQUEST:
@@ -335,6 +341,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"error: --env {args.env} needs {e.name}: {e}", file=sys.stderr)
         return 2
     config = LearnerConfig()
+    if args.learner == "sgim-acts":  # its teachers answer requests: core/acts_runner.py
+        from .acts_runner import main_acts
+
+        return main_acts(args, world, config)
     learner = make_learner(args.learner, world.env.action_dim, world.env.outcome_dim,
                            args.seed, config, world.scale)
     args.output.parent.mkdir(parents=True, exist_ok=True)
