@@ -142,6 +142,8 @@ def test_the_request_api_refuses_answers_it_did_not_ask_for():
     assert made.request() is request  # pending until answered
     with pytest.raises(ValueError, match="comes from 'other'"):
         made.on_answer(request, teacher("other").answer(request.goal))
+    with pytest.raises(ValueError, match="the answer shows none"):
+        made.on_answer(request, teacher().answer(request.goal, with_action=False))
     made.on_answer(request, None)
     with pytest.raises(ValueError, match="not the learner's pending request"):
         made.on_answer(request, None)

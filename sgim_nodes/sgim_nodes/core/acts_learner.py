@@ -191,9 +191,12 @@ class SgimActsLearner(Learner):
         if answer is not None and answer.teacher != request.teacher:
             raise ValueError(f"request {request.index} asked {request.teacher!r}, the answer "
                              f"comes from {answer.teacher!r}")
+        kind = request.strategy.kind
+        if kind == MIMICRY and answer is not None and answer.action is None:
+            raise ValueError(f"request {request.index} asked {request.teacher!r} for its "
+                             f"action (mimicry); the answer shows none")
         self.pending = None
         episode = self.episode
-        kind = request.strategy.kind
         usable = answer is not None and (
             answer.action is not None if kind == MIMICRY else answer.outcome is not None)
         episode.log.answered = usable
