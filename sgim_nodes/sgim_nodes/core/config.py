@@ -200,9 +200,9 @@ class LearnerConfig:
     """Imitations a_demo + a_rand after each demonstration.  Chosen; the paper gives none."""
     imitation_epsilon: float = 0.05
     """Bound on the Euclidean norm of a_rand (so also on each component), in action units.
-    Chosen by measurement (benchmarks/measure_imitation.py, docs/learners.md): on the fishing
-    world's teaching set, imitations land a median 0.028 from the demonstrated outcome and 93 %
-    within the world's noise (0.2 scattered them a median 0.077, 47 % within the noise)."""
+    Chosen by measurement on the fishing world's teaching set: the width at which most
+    imitations still land within the world's noise of the demonstrated outcome, while a wider
+    one scatters them (docs/notes/measurements.md, "how far imitations land")."""
 
     # --- SGIM-ACTS: the cost of each kind of strategy (strategies.py) ---
     acts_cost_autonomous: float = 1.0
