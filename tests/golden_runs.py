@@ -1,11 +1,11 @@
 """Digests of reference runs whose movements must be the same on every x86-64 machine.
 
 The settings are those of tests/ros/test_graph_runs.py (fishing, 300 movements, evaluations
-every 100, the teacher every 50), seed 0; the runner makes them in
-tests/core/test_portable_runs.py, the graph in test_graph_runs.py, and both must give these
-digests bit for bit, whatever CPU model, BLAS kernel or numpy SIMD level runs them
-(core/portable.py). A change of the learner or the world that changes its movements changes
-them: update them in the same commit, with the reason.
+every 100, the teacher every 50), seed 0; test_graph_runs.py makes them with the runner and
+through the graph, test_portable.py with the runner under other BLAS kernels and SIMD levels,
+and all must give these digests bit for bit, whatever CPU model, BLAS kernel or numpy SIMD
+level runs them (core/portable.py). A change of the learner or the world that changes its
+movements changes them: update them in the same commit, with the reason.
 """
 
 from __future__ import annotations
