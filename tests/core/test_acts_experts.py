@@ -94,3 +94,47 @@ def test_the_arms_experts_split_the_teaching_set_by_region():
         ExpertSpec("x", "left").rows(TS.outcomes)
     with pytest.raises(ValueError, match="distinct"):
         build_experts([ARM_EXPERTS[0]] * 2, TS.actions, TS.outcomes, 0, 2.0)
+
+
+def test_the_fishing_teachers_know_their_parts_of_the_lake():
+    from sgim_nodes.core.acts_runner import experts_for
+    from sgim_nodes.core.runner import build_world
+    from sim_bridge.lake import DEFAULT_LAKE, PARTS
+
+    world = build_world("fishing", 0)
+    parts = [world.part_of(o) for o in world.teaching_outcomes]
+    assert set(parts) <= set(PARTS)
+    experts = experts_for("fishing", world, 0)
+    assert sorted(experts) == ["centre", "rough", "west"]
+    centre, west, rough = experts["centre"], experts["west"], experts["rough"]
+    assert {world.part_of(o) for o in centre.outcomes} == {"basin", "north", "east"}
+    assert {world.part_of(o) for o in west.outcomes} == {"west", "south", "pond"}
+    assert len(centre.outcomes) + len(west.outcomes) == len(rough.outcomes) == len(parts)
+    assert centre.precision == west.precision == 0.0 < rough.precision
+    # The pond: west shows it, centre has nothing there.
+    pond, _ = DEFAULT_LAKE.isolated_centre_radius()
+    assert centre.answer(pond) is None
+    assert world.part_of(west.answer(pond, with_action=False).outcome) == "pond"
+
+
+def test_the_rough_fishing_teacher_lands_about_two_noise_units_off():
+    """What the issue asks of `rough` (its outcomes about 2 noise units off), measured: each
+    teaching entry asked twice, the shown action cast in the teacher's own world."""
+    from sgim_nodes.core.acts_runner import experts_for
+    from sgim_nodes.core.runner import build_world
+
+    world = build_world("fishing", 3)
+    experts = experts_for("fishing", world, 3)
+    noise = world.scale.noise_rms
+
+    def offsets(name: str) -> np.ndarray:
+        expert, out = experts[name], []
+        for goal in np.repeat(expert.outcomes, 2, axis=0):
+            answer = expert.answer(goal)
+            if answer is not None and answer.outcome is not None:
+                out.append(np.linalg.norm(answer.outcome - expert.outcomes[answer.index]))
+        return np.array(out) / noise
+
+    rough, precise = offsets("rough"), np.concatenate([offsets("centre"), offsets("west")])
+    assert 1.0 < np.median(rough) < 3.5, np.median(rough)
+    assert np.median(precise) < 0.6, np.median(precise)

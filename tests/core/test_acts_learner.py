@@ -189,8 +189,8 @@ def test_the_cli_runs_sgim_acts_and_writes_its_requests_and_answers(tmp_path, ca
                         "--arm-joints", "7", "--strategies", "mimicry:nobody"]) == 2
     assert "unknown teacher 'nobody'" in capsys.readouterr().err
     with pytest.raises(ValueError, match="no SGIM-ACTS teachers are specified for world "
-                                         "'fishing'"):
-        experts_for("fishing", None, 0)
+                                         "'moon'"):
+        experts_for("moon", None, 0)
 
 
 def test_a_run_whose_teachers_never_answer_stops_instead_of_looping():

@@ -25,14 +25,14 @@ from .acts_learner import ACTS, SgimActsLearner
 from .config import LearnerConfig
 from .environment import is_success
 from .evaluator import Evaluator
-from .experts import ARM_EXPERTS, Expert, ExpertSpec, build_experts
+from .experts import ARM_EXPERTS, FISHING_EXPERTS, Expert, ExpertSpec, build_experts
 from .learners import make_learner
 from .planar_arm import ARMS
 
 EXPERTS_BY_WORLD: dict[str, tuple[ExpertSpec, ...]] = {
-    "planar-arm": ARM_EXPERTS, **{name: ARM_EXPERTS for name in ARMS}}
-"""The teachers each world gives SGIM-ACTS. The fishing world's three (centre, west, rough;
-issue 33) will be added here as ExpertSpecs over its teaching set: no data file changes."""
+    "fishing": FISHING_EXPERTS, "planar-arm": ARM_EXPERTS,
+    **{name: ARM_EXPERTS for name in ARMS}}
+"""The teachers each world gives SGIM-ACTS (experts.py), over its teaching set."""
 
 
 MAX_REQUESTS_IN_A_ROW = 10_000
@@ -51,7 +51,7 @@ def experts_for(env: str, world: Any, seed: int,
     if world.teaching_actions is None:
         raise ValueError(f"world {env!r} has no teaching set to build teachers from")
     return build_experts(specs, world.teaching_actions, world.teaching_outcomes, seed,
-                         world.scale.size, world.make_teacher_env)
+                         world.scale.size, world.make_teacher_env, world.part_of)
 
 
 def _vec(x) -> list[float] | None:

@@ -22,7 +22,7 @@ Deterministic given the seed: ties between equally near demonstrations go to the
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -115,17 +115,26 @@ class ExpertSpec:
     its precision (action units) and its radius (fraction of the outcome box's side)."""
 
     name: str
-    part: str  # "all", or "low:<d>" / "high:<d>": the rows below / above the median on axis d
+    # "all"; "low:<d>" / "high:<d>": the rows below / above the median on axis d; or
+    # "parts:<a>+<b>...": the rows whose outcome lies in those named parts of the world
+    part: str
     precision: float = 0.0
     radius_size: float = math.inf
 
-    def rows(self, outcomes: np.ndarray) -> np.ndarray:
+    def rows(self, outcomes: np.ndarray,
+             part_of: Callable[[np.ndarray], str] | None = None) -> np.ndarray:
         if self.part == "all":
             return np.arange(len(outcomes))
         side, _, axis = self.part.partition(":")
+        if side == "parts":
+            if part_of is None:
+                raise ValueError(f"expert {self.name!r}: part {self.part!r} names parts of a "
+                                 "world, and this world names none")
+            wanted = set(axis.split("+"))
+            return np.flatnonzero([part_of(o) in wanted for o in np.asarray(outcomes)])
         if side not in ("low", "high") or not axis.isdigit():
-            raise ValueError(f"expert {self.name!r}: part must be all, low:<axis> or "
-                             f"high:<axis>, got {self.part!r}")
+            raise ValueError(f"expert {self.name!r}: part must be all, low:<axis>, "
+                             f"high:<axis> or parts:<a>+<b>, got {self.part!r}")
         coord = np.asarray(outcomes, dtype=float)[:, int(axis)]
         median = float(np.median(coord))
         return np.flatnonzero(coord < median if side == "low" else coord >= median)
@@ -142,20 +151,39 @@ actions perturbed by 0.15 per action number. Measured on the unit arms (7 and 12
 side 2): that moves the end point a median 0.13 to 0.17, most of the way to the nearest
 other teaching outcome (a median 0.17 to 0.20 away). The radius, a quarter of the box's side
 (0.5), is two to three such spacings: an expert answers about goals near what it knows, and a
-half's expert says "none there" deep in the other half. The fishing world's teachers
-(centre, west, rough) will be specified the same way."""
+half's expert says "none there" deep in the other half."""
+
+
+FISHING_EXPERTS = (
+    ExpertSpec("centre", "parts:basin+north+east", 0.0, 0.1),
+    ExpertSpec("west", "parts:west+south+pond", 0.0, 0.1),
+    ExpertSpec("rough", "all", 0.07, 0.1),
+)
+"""The fishing world's teachers (issue 33), over its teaching set of 29 demonstrations:
+``centre`` knows the basin and the north and east arms (19), ``west`` the west and south arms
+and the isolated pond (10), ``rough`` all 29 but shows each action perturbed by 0.07 per
+action number. Measured on the teaching set (4 casts of each entry per width, seed 777):
+perturbations of 0.06 and 0.08 land a median 1.8 and 2.5 noise units from the taught outcome,
+and about 3 casts in 10 on land, against 0.2 units unperturbed, so 0.07 lands about 2 units
+off, as the issue asks. The radius, a tenth of the box's side (0.2), was chosen on the
+reachable map (data file), never on the benchmark goals: of the map's points in an expert's
+own parts, 99 % lie within 0.19 of one of its demonstrations, while 90 % of the points in the
+other expert's parts lie beyond 0.17, so each expert says "none there" about most goals in
+the other's parts."""
 
 
 def build_experts(specs: Sequence[ExpertSpec], actions: np.ndarray, outcomes: np.ndarray,
-                  seed: int, box_size: float, make_world=None) -> dict[str, Expert]:
+                  seed: int, box_size: float, make_world=None,
+                  part_of: Callable[[np.ndarray], str] | None = None) -> dict[str, Expert]:
     """The experts of ``specs`` over one teaching set, each with its own random stream and,
-    when ``make_world`` is given, its own copy of the world to cast in."""
+    when ``make_world`` is given, its own copy of the world to cast in; ``part_of`` names the
+    part of the world an outcome lies in (for specs of named parts)."""
     names = [s.name for s in specs]
     if len(set(names)) != len(names):
         raise ValueError(f"expert names must be distinct, got {names}")
     experts = {}
     for spec in specs:
-        rows = spec.rows(outcomes)
+        rows = spec.rows(outcomes, part_of)
         if len(rows) == 0:
             raise ValueError(f"expert {spec.name!r}: no demonstration in part {spec.part!r}")
         world = None if make_world is None else make_world()
