@@ -51,6 +51,11 @@ _ARM_TUPLES = tuple(tuple((float(px), float(py)) for px, py in poly) for poly in
 POND = (-7.225, -2.125, 0.75)
 
 
+PARTS = ("basin", *ARMS, "pond")
+"""The lake's named parts: the basin around the pier, its four arms (beyond the basin) and the
+isolated pond. SGIM-ACTS's teachers each know some of them (core/experts.py)."""
+
+
 def _in_ellipse(xy: np.ndarray, e: tuple[float, float, float, float]) -> np.ndarray:
     cx, cy, a, b = e
     return ((xy[..., 0] - cx) / a) ** 2 + ((xy[..., 1] - cy) / b) ** 2 <= 1.0
@@ -160,6 +165,20 @@ class Lake:
         if any(_point_in_polygon(x, y, poly) for poly in _ARM_TUPLES):
             return MAIN_LAKE
         return LAND
+
+    def part_at(self, x: float, y: float) -> str:
+        """The named part (PARTS) a world point (metres) lies in, or "land": an arm is the
+        valley beyond the basin's ellipse, where the two overlap the point is the basin's."""
+        body = self.body_at(x, y)
+        if body == ISOLATED_POND:
+            return "pond"
+        if body == LAND:
+            return "land"
+        bx, by, a, b = BASIN
+        if ((x - bx) / a) ** 2 + ((y - by) / b) ** 2 <= 1.0:
+            return "basin"
+        return next(name for name, poly in zip(ARMS, _ARM_TUPLES, strict=True)
+                    if _point_in_polygon(x, y, poly))
 
     def isolated_centre_radius(self) -> tuple[np.ndarray, float]:
         """The pond in normalised outcome units: centre (2,) and radius."""

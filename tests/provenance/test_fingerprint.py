@@ -23,11 +23,21 @@ def test_source_digest_ignores_comments_and_docstrings_not_code(tmp_path):
         def f(x):
             """Doc."""
             return x + 1  # a comment
+
+        class Config:
+            """Class doc."""
+            width: float = 0.05
+            """Field doc."""
+            if True:
+                """Text in a branch."""
         '''
     a = _write(tmp_path, "a.py", base)
     first = fp.source_digest([a])
-    _write(tmp_path, "a.py", base.replace("Doc.", "Other words.").replace("a comment", "c"))
+    _write(tmp_path, "a.py", base.replace("Doc.", "Other words.").replace("a comment", "c")
+           .replace("Field doc.", "Other.").replace("Text in", "Words in"))
     assert fp.source_digest([a]) == first
+    _write(tmp_path, "a.py", base.replace("0.05", "0.2"))
+    assert fp.source_digest([a]) != first
     _write(tmp_path, "a.py", base.replace("x + 1", "x + 2"))
     assert fp.source_digest([a]) != first
     _write(tmp_path, "a.py", base)

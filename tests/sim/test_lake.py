@@ -52,3 +52,16 @@ def test_scalar_point_test_agrees_with_the_vectorised_one() -> None:
     for lk in (lake.DEFAULT_LAKE, lake.Lake(pond_radius=0.3)):
         scalar = [lk.body_at(float(x), float(y)) for x, y in pts]
         assert scalar == lk.water_body(pts).tolist()
+
+
+def test_each_named_part_of_the_lake_is_told_apart():
+    from sim_bridge.lake import DEFAULT_LAKE, PARTS
+
+    points = {"basin": (1.0, 0.3), "west": (-8.0, 1.8), "east": (8.0, 0.6),
+              "north": (0.3, 8.0), "south": (2.4, -8.0), "pond": (-7.225, -2.125),
+              "land": (-5.0, -6.0)}
+    assert {DEFAULT_LAKE.part_at(x, y) for x, y in points.values()} == {*PARTS, "land"}
+    for name, (x, y) in points.items():
+        assert DEFAULT_LAKE.part_at(x, y) == name
+    # Where an arm's root overlaps the basin, the point is the basin's.
+    assert DEFAULT_LAKE.part_at(-1.8, 1.0) == "basin"

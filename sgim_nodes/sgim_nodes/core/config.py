@@ -200,9 +200,27 @@ class LearnerConfig:
     """Imitations a_demo + a_rand after each demonstration.  Chosen; the paper gives none."""
     imitation_epsilon: float = 0.05
     """Bound on the Euclidean norm of a_rand (so also on each component), in action units.
-    Chosen by measurement (benchmarks/measure_imitation.py, docs/learners.md): on the fishing
-    world's teaching set, imitations land a median 0.028 from the demonstrated outcome and 93 %
-    within the world's noise (0.2 scattered them a median 0.077, 47 % within the noise)."""
+    Chosen by measurement on the fishing world's teaching set: the width at which most
+    imitations still land within the world's noise of the demonstrated outcome, while a wider
+    one scatters them (docs/notes/measurements.md, "how far imitations land")."""
+
+    # --- SGIM-ACTS: the cost of each kind of strategy (strategies.py) ---
+    acts_cost_autonomous: float = 1.0
+    """Cost of one autonomous episode (SAGG-RIAC's goal attempt), in movement-equivalents:
+    the unit. SGIM-ACTS (Nguyen & Oudeyer 2012) divides each (strategy, region) pair's
+    competence progress by its strategy's cost; only SGIM-ACTS reads these three fields."""
+    acts_cost_emulation: float = 5.0
+    """Cost of asking a teacher for an outcome to reach (emulation). The 2012 paper makes the
+    social strategies dearer than autonomous exploration; its values were not at hand, so this
+    one is chosen: a request takes a person's attention and one demonstration of theirs,
+    scarcer than the robot's own movements (the paper's SGIM-D teacher speaks once every 150
+    movements), and showing only where the result should land asks the least of the teacher.
+    Chosen, not measured."""
+    acts_cost_mimicry: float = 10.0
+    """Cost of asking a teacher for its movement itself (mimicry): the teacher must show the
+    whole action in a form the learner can copy (kinesthetic or teleoperated), about twice the
+    effort of showing an effect (emulation). Chosen, not measured. A cost weighs the
+    strategy's interest and is tallied per request; it spends no movements of the budget."""
 
     # --- memory index ---
     memory_rebuild_fraction: float = 0.5
@@ -239,7 +257,8 @@ class LearnerConfig:
         for name in ("mode3_radius_noise", "reach_threshold_noise", "nm_initial_step",
                      "local_radius_action", "local_step_fraction",
                      "failure_cost_size", "imitation_epsilon", "memory_rebuild_fraction",
-                     "explore_distance_size", "trust_radius_action", "competence_floor_noise"):
+                     "explore_distance_size", "trust_radius_action", "competence_floor_noise",
+                     "acts_cost_autonomous", "acts_cost_emulation", "acts_cost_mimicry"):
             if not getattr(self, name) > 0.0:
                 fail(name, "must be > 0")
         for name in ("alpha", "explore_gain", "min_region_width_size", "explore_action",

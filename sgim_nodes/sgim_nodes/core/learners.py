@@ -17,12 +17,15 @@ Successful movements are stored in memory; failed ones count as movements but ar
 - "demo-only": always a small variation of the latest demonstration (random actions before
                the first one).
 - "random":    uniform random actions; demonstrations are ignored.
+- "sgim-acts": chooses for each episode a goal region and a strategy (autonomous, mimicry or
+               emulation of one of its teachers), asking the teachers itself
+               (acts_learner.py; core only, not yet in the node graph).
 """
 
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -42,6 +45,10 @@ from .teaching import OWN_PROCESSES
 RANDOM = "random"
 DEMONSTRATION = "demonstration"
 LEARNER_NAMES = ("sgim-d", "saggriac", "random-goals", "demo-only", "random")
+"""The learners the node graph runs too (its launcher, parameters and bags enumerate these)."""
+CORE_LEARNER_NAMES = (*LEARNER_NAMES, "sgim-acts")
+"""Every learner make_learner builds: sgim-acts (acts_learner.py) runs in the core only until
+its nodes exist, so it stays out of LEARNER_NAMES."""
 GOAL_BABBLERS = ("sgim-d", "saggriac", "random-goals")
 UNIFORM_GOALS = (0.0, 1.0, 0.0)  # random-goals: mode 2 only
 
@@ -295,9 +302,20 @@ class GoalBabblingLearner(Learner):
 
 def make_learner(name: str, action_dim: int, outcome_dim: int, seed: int,
                  config: LearnerConfig | None = None,
-                 scale: WorldScale | None = None) -> Learner:
-    """Build one of LEARNER_NAMES; `seed` fixes every random stream (see random_streams);
-    `scale` is the world's (its outcome box and noise, scale.py)."""
+                 scale: WorldScale | None = None, teachers: Sequence[str] = (),
+                 strategies: Sequence[str] | None = None) -> Learner:
+    """Build one of CORE_LEARNER_NAMES; `seed` fixes every random stream (see random_streams);
+    `scale` is the world's (its outcome box and noise, scale.py). sgim-acts only: the names of
+    the `teachers` it may ask and its `strategies` (names, default: every one of them)."""
+    if name == "sgim-acts":
+        from .acts_learner import SgimActsLearner
+        from .strategies import parse_strategies
+
+        chosen = (None if strategies is None
+                  else parse_strategies(strategies, config, teachers))
+        return SgimActsLearner(action_dim, outcome_dim, seed, config, scale, teachers, chosen)
+    if tuple(teachers) or strategies is not None:
+        raise ValueError(f"{name} takes no teachers or strategies: only sgim-acts chooses them")
     if name in GOAL_BABBLERS:
         return GoalBabblingLearner(action_dim, outcome_dim, seed, config, scale,
                                    social=name == "sgim-d", name=name)
@@ -305,4 +323,4 @@ def make_learner(name: str, action_dim: int, outcome_dim: int, seed: int,
         return DemoOnlyLearner(action_dim, outcome_dim, seed, config, scale)
     if name == "random":
         return RandomLearner(action_dim, outcome_dim, seed, config, scale)
-    raise ValueError(f"unknown learner {name!r}; choose one of {LEARNER_NAMES}")
+    raise ValueError(f"unknown learner {name!r}; choose one of {CORE_LEARNER_NAMES}")

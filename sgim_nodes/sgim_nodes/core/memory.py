@@ -10,8 +10,12 @@ points takes ~1-2 ms, so even one rebuild per 512 inserts costs little over a 50
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-from scipy.spatial import cKDTree
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 
 class Memory:
@@ -62,6 +66,10 @@ class Memory:
         return self._n - 1
 
     def _rebuild(self) -> None:
+        # Imported here: scipy.spatial takes about 0.4 s of CPU to import, which every node of
+        # the graph that imports the core (most never build a memory) paid at each start.
+        from scipy.spatial import cKDTree
+
         self._tree = cKDTree(self._outcomes[: self._n].copy())
         self._n_indexed = self._n
         self.n_rebuilds += 1

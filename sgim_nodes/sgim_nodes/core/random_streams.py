@@ -8,6 +8,7 @@ the processes interleave: this is what lets the graph reproduce a single-process
 
 from __future__ import annotations
 
+import zlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,7 +17,8 @@ SEED_MAX = 2**32 - 1
 """The largest seed of a run. numpy would take any integer >= 0, but the node graph carries the
 seed in a uint32 (RunStatus.seed); one range everywhere keeps a seed that `learn` takes one the
 graph takes too (sgim_ros.params.SEED_MAX is the same number, for the nodes and the launcher)."""
-STREAM_NAMES = ("goals", "explorer", "imitation", "random", "teacher", "teacher-world")
+STREAM_NAMES = ("goals", "explorer", "imitation", "random", "teacher", "teacher-world",
+                "strategies", "experts")
 """Appending a name keeps every earlier stream: child i of a SeedSequence does not depend on
 how many children are spawned."""
 
@@ -29,6 +31,17 @@ def component_rng(seed: int, name: str) -> np.random.Generator:
         raise ValueError(f"seed must be in 0..{SEED_MAX}, got {seed}")
     children = np.random.SeedSequence(seed).spawn(len(STREAM_NAMES))
     return np.random.default_rng(children[STREAM_NAMES.index(name)])
+
+
+def member_rng(seed: int, name: str, member: str) -> np.random.Generator:
+    """The generator of one member of stream `name` (e.g. teacher "west" of "experts"): a
+    child of that stream's seed keyed by the member's name, so that adding, removing or
+    reordering members leaves every other member's draws unchanged."""
+    component_rng(seed, name)  # checks the name and the seed
+    child = np.random.SeedSequence(seed).spawn(len(STREAM_NAMES))[STREAM_NAMES.index(name)]
+    key = zlib.crc32(member.encode("utf-8"))
+    return np.random.default_rng(np.random.SeedSequence(child.entropy,
+                                                        spawn_key=(*child.spawn_key, key)))
 
 
 def world_seed(seed: int, name: str) -> int:

@@ -9,6 +9,7 @@ records in memory.
 Example:
     python -m sgim_nodes.core.runner --learner sgim-d --movements 5000 --seed 3 \
         --env planar-arm --eval-every 250 --output runs/sgimd_3.jsonl
+    (``--learner sgim-acts`` asks its own teachers: core/acts_runner.py)
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ from .help_request import (
     budget_for,
     check_timing,
 )
-from .learners import LEARNER_NAMES, Learner, make_learner
+from .learners import CORE_LEARNER_NAMES, Learner, make_learner
 from .planar_arm import ARMS, PlanarArm, benchmark_goals, teaching_set
 from .random_streams import SEED_MAX, component_rng, world_seed
 from .repeatable_casts import RepeatableCasts
@@ -73,6 +74,9 @@ class World:
     # The teacher's own copy of the world (teaching.py, rule "ability"), built on demand:
     # only a social learner's teacher casts in it.
     make_teacher_env: Callable[[], Environment] | None = None
+    # The named part of the world an outcome lies in (the fishing lake's basin, arms and
+    # pond), for teachers who know some parts only (experts.py); None: the world names none.
+    part_of: Callable[[np.ndarray], str] | None = None
 
 
 def fishing_scale() -> WorldScale:
@@ -117,19 +121,25 @@ def build_world(name: str, seed: int, noise: float | None = None, arm_joints: in
         return World(env, eval_env, benchmark_goals(env, cells=cells), ts.actions,
                      ts.outcomes, env.scale, lambda: make(teacher_seed))
     if name == "fishing":
+        from sim_bridge import scaling
         from sim_bridge.data_files import load_benchmark_goals, load_teaching_set
         from sim_bridge.fishing_world import FishingWorld
         from sim_bridge.lake import lake_with_pond_radius
 
         kw: dict[str, Any] = {} if noise is None else {"noise": noise}
+        lake = lake_with_pond_radius(pond_radius)
         if pond_radius is not None:
-            kw["lake"] = lake_with_pond_radius(pond_radius)
+            kw["lake"] = lake
+
+        def part_of(outcome: np.ndarray) -> str:
+            return lake.part_at(*(float(v) for v in scaling.outcome_to_world(outcome)))
+
         ts = load_teaching_set()
         eval_world = FishingWorld(seed=seed + EVALUATION_SEED_OFFSET, **kw)
         return World(FishingWorld(seed=seed, **kw), eval_world,
                      np.asarray(load_benchmark_goals(), dtype=float),
                      np.asarray(ts.actions, dtype=float), np.asarray(ts.outcomes, dtype=float),
-                     fishing_scale(), lambda: FishingWorld(seed=teacher_seed, **kw))
+                     fishing_scale(), lambda: FishingWorld(seed=teacher_seed, **kw), part_of)
     raise ValueError(f"unknown env {name!r}; choose one of {ENV_NAMES}")
 
 
@@ -257,8 +267,11 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         prog="python -m sgim_nodes.core.runner",
         description="Run one learner on one world without ROS and log every movement and "
                     "evaluation as JSON lines (flushed as it goes).")
-    p.add_argument("--learner", choices=LEARNER_NAMES, default="sgim-d",
+    p.add_argument("--learner", choices=CORE_LEARNER_NAMES, default="sgim-d",
                    help="which learner to run (default: %(default)s)")
+    p.add_argument("--strategies", default=None,
+                   help="sgim-acts: comma-separated strategies, e.g. autonomous,mimicry:west "
+                        "(default: autonomous and both social ones of every teacher)")
     p.add_argument("--movements", type=int, default=5000,
                    help="number of movements, the paper's budget is 5000 (default: %(default)s)")
     p.add_argument("--seed", type=int, default=0,
@@ -313,6 +326,8 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         p.error("--eval-every must be >= 0")
     if args.teacher_tolerance_noise < 0:
         p.error("--teacher-tolerance-noise must be >= 0")
+    if args.strategies is not None and args.learner != "sgim-acts":
+        p.error("--strategies needs --learner sgim-acts")
     if args.pond_radius is not None and args.env != "fishing":
         p.error("--pond-radius needs --env fishing")
     if args.learner == "demo-only" and args.timing == ON_REQUEST:
@@ -335,6 +350,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"error: --env {args.env} needs {e.name}: {e}", file=sys.stderr)
         return 2
     config = LearnerConfig()
+    if args.learner == "sgim-acts":  # its teachers answer requests: core/acts_runner.py
+        from .acts_runner import main_acts
+
+        return main_acts(args, world, config)
     learner = make_learner(args.learner, world.env.action_dim, world.env.outcome_dim,
                            args.seed, config, world.scale)
     args.output.parent.mkdir(parents=True, exist_ok=True)

@@ -11,8 +11,9 @@ of its own so that a difference can be named:
 - ``parameters``: the run's resolved parameters that shape it (``parameters`` below);
 - ``numpy``, ``scipy``, ``pybullet``, ``python``: the versions that compute it.
 
-Source files count by their syntax tree without docstrings, so a comment or a docstring does
-not make a page stale, while any change of code does. The graph's nodes are not in it: the
+Source files count by their syntax tree without docstrings (nor the strings that document a
+dataclass's fields), so a comment or a docstring does not make a page stale, while any change
+of code does. The graph's nodes are not in it: the
 graph = runner tests hold them to the core's movements. Nor is the machine: core/portable.py
 makes a seed give the same run on every x86-64 CPU (tests/golden_runs.py holds the proof), so
 reports name the machine but a figure made on one checks on another.
@@ -58,14 +59,20 @@ def _digest(parts: Iterable[bytes], length: int = 16) -> str:
     return h.hexdigest()[:length]
 
 
+def _is_text(statement: ast.stmt) -> bool:
+    """A bare string statement: a docstring, or the text documenting a dataclass field."""
+    return (isinstance(statement, ast.Expr) and isinstance(statement.value, ast.Constant)
+            and isinstance(statement.value.value, str))
+
+
 def _without_docstrings(tree: ast.AST) -> ast.AST:
+    """The tree without its bare string statements (they do nothing when the code runs)."""
     for node in ast.walk(tree):
-        body = getattr(node, "body", None)
-        if (isinstance(node, ast.Module | ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef)
-                and body and isinstance(body[0], ast.Expr)
-                and isinstance(body[0].value, ast.Constant)
-                and isinstance(body[0].value.value, str)):
-            node.body = body[1:] or [ast.Pass()]
+        for name in ("body", "orelse", "finalbody"):
+            body = getattr(node, name, None)
+            if isinstance(body, list) and any(isinstance(s, ast.stmt) and _is_text(s)
+                                               for s in body):
+                setattr(node, name, [s for s in body if not _is_text(s)] or [ast.Pass()])
     return tree
 
 
