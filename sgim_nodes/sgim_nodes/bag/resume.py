@@ -15,10 +15,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sgim_nodes.bag.rebuild import RebuiltState, rebuild_from_records
 from sgim_nodes.bag.records import RunRecords
 from sgim_nodes.bag.run_folder import (  # noqa: F401 - the launcher's names for them
     FIRST_SEGMENT,
@@ -28,6 +28,9 @@ from sgim_nodes.bag.run_folder import (  # noqa: F401 - the launcher's names for
 )
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.teaching import OWN_PROCESSES
+
+if TYPE_CHECKING:
+    from sgim_nodes.bag.rebuild import RebuiltState
 
 
 def records_until(records: RunRecords, count: int) -> RunRecords:
@@ -78,6 +81,10 @@ class ResumePoint:
 
 def resume_point(run_dir: str | Path, config: LearnerConfig | None = None,
                  limit: int = 0) -> ResumePoint:
+    # Imported here: the rebuild brings the learner's whole core (scipy's trees included),
+    # which a node starting a fresh run never needs; six nodes import this module.
+    from sgim_nodes.bag.rebuild import rebuild_from_records
+
     records = load_run_folder(run_dir, limit)
     state = rebuild_from_records(records, config)
     count = state.n_movements
