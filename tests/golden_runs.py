@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Iterable, Sequence
+from concurrent.futures import Future, ProcessPoolExecutor
+from multiprocessing import get_context
 
 import numpy as np
 
@@ -69,3 +71,14 @@ def runner_records(learner: str, seed: int = SEED, movements: int = MOVEMENTS,
     run(made, world, movements, eval_every, seed, records.append, teacher_period=PERIOD,
         teacher_tolerance_noise=TOLERANCE.get(learner, 1.0), **teacher)
     return records
+
+
+def runner_records_later(learner: str, **settings) -> Future[list[dict]]:
+    """``runner_records`` in a process of its own, started now: a graph test starts it before
+    its graph run and takes ``.result()`` after, so that the runner uses a core the graph's
+    start-up leaves idle. Spawned, not forked: the test process holds rclpy's threads."""
+    executor = ProcessPoolExecutor(max_workers=1, mp_context=get_context("spawn"))
+    try:
+        return executor.submit(runner_records, learner, **settings)
+    finally:
+        executor.shutdown(wait=False)  # the submitted run goes on; the process then ends

@@ -21,7 +21,7 @@ from tests.golden_runs import (
     TOLERANCE,
     bag_digest,
     runner_digest,
-    runner_records,
+    runner_records_later,
 )
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -52,8 +52,7 @@ def finish(child, tmp_path, learner, timeout=330):
 # "ability": the learner's inverse model cast for a goal in the teacher's own world lands
 # within 8 noise units of it): at some turns every teaching goal is within reach and the
 # teacher shows nothing. Its turns without a demonstration, and the teacher's casts in its own
-# world, must still match the runner.
-run_single_process = runner_records
+# world, must still match the runner (runner_records_later: beside the graph run).
 
 
 def assert_the_teachers_checks(run, records) -> None:
@@ -94,14 +93,17 @@ def test_the_teachers_choice_rule_through_the_graph(ros_processes, ros_domain, t
     """teacher_choice (issue 14) as a node parameter: the graph's teacher demonstrates the
     same goals as the runner's with the same rule, and the learner makes the same movements."""
     choice, seed = "farthest-unreached", 1  # seed 1: 3 entries shown, others than by default
-    run = finish(run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--param",
-                           f"tolerance_noise={TOLERANCE['sgim-d']}", "--param",
-                           f"teacher_choice={choice}", seed=seed), tmp_path, "sgim-d")
-    records = run_single_process("sgim-d", seed=seed, teacher_choice=choice)
+    child = run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--param",
+                      f"tolerance_noise={TOLERANCE['sgim-d']}", "--param",
+                      f"teacher_choice={choice}", seed=seed)
+    later = runner_records_later("sgim-d", seed=seed, teacher_choice=choice)
+    by_default = runner_records_later("sgim-d", seed=seed)
+    run = finish(child, tmp_path, "sgim-d")
+    records = later.result()
     shown = [d.teaching_set_index for d in run.demonstrations if len(d.action)]
     expected = [r["teaching_index"] for r in records if r["type"] == "demonstration"]
     assert shown == expected and len(shown) >= 3
-    default = [r["teaching_index"] for r in run_single_process("sgim-d", seed=seed)
+    default = [r["teaching_index"] for r in by_default.result()
                if r["type"] == "demonstration"]
     assert default != expected  # the rule changed what was taught
     assert_the_teachers_checks(run, records)
@@ -118,10 +120,12 @@ def test_the_own_movements_rule_s_checks_through_the_graph(ros_processes, ros_do
     runner's and redo every turn, the silent ones (most, with this lenient tolerance) too."""
     from sgim_msgs.msg import Movement
 
-    run = finish(run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--param",
-                           f"tolerance_noise={TOLERANCE['sgim-d']}", "--param",
-                           "reached_rule=own-movements"), tmp_path, "sgim-d")
-    records = run_single_process("sgim-d", teacher_rule="own-movements")
+    child = run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--param",
+                      f"tolerance_noise={TOLERANCE['sgim-d']}", "--param",
+                      "reached_rule=own-movements")
+    later = runner_records_later("sgim-d", teacher_rule="own-movements")
+    run = finish(child, tmp_path, "sgim-d")
+    records = later.result()
     moves = [r for r in records if r["type"] == "movement"]
     for graph_move, move in zip(run.movements, moves, strict=True):
         assert np.array_equal(graph_move.action, np.asarray(move["action"])), graph_move.index
@@ -146,11 +150,11 @@ def social_mode_run(ros_processes, ros_domain, tmp_path, name, seed=SEED, **teac
     runner's records for the same settings; the graph's movements must be the runner's."""
     params = [f"tolerance_noise={TOLERANCE['sgim-d']}",
               *(f"{key}={value}" for key, value in teacher.items())]
-    run = finish(run_graph(ros_processes, ros_domain, tmp_path / name, "sgim-d",
-                           *itertools.chain.from_iterable(("--param", p) for p in params),
-                           seed=seed),
-                 tmp_path / name, "sgim-d")
-    records = run_single_process("sgim-d", seed=seed, **teacher)
+    child = run_graph(ros_processes, ros_domain, tmp_path / name, "sgim-d",
+                      *itertools.chain.from_iterable(("--param", p) for p in params), seed=seed)
+    later = runner_records_later("sgim-d", seed=seed, **teacher)
+    run = finish(child, tmp_path / name, "sgim-d")
+    records = later.result()
     moves = [r for r in records if r["type"] == "movement"]
     assert [m.index for m in run.movements] == list(range(1, MOVEMENTS + 1))
     for graph_move, move in zip(run.movements, moves, strict=True):
@@ -276,10 +280,11 @@ def test_where_reach_goal_jobs_end_changes_no_movement(ros_processes, ros_domain
     """A reach_goal job spans goals up to the arbiter's next boundary; with two goals per job
     the jobs end at other goal boundaries than the default's, and the run is still the
     runner's, movement for movement (the explorer's choose_goal waits for every competence)."""
-    run = finish(run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--param",
-                           f"tolerance_noise={TOLERANCE['sgim-d']}", "--param",
-                           "goals_per_job=2"), tmp_path, "sgim-d")
-    moves = [r for r in run_single_process("sgim-d") if r["type"] == "movement"]
+    child = run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--param",
+                      f"tolerance_noise={TOLERANCE['sgim-d']}", "--param", "goals_per_job=2")
+    later = runner_records_later("sgim-d")
+    run = finish(child, tmp_path, "sgim-d")
+    moves = [r for r in later.result() if r["type"] == "movement"]
     assert len(run.movements) == len(moves) == MOVEMENTS
     for graph_move, move in zip(run.movements, moves, strict=True):
         assert np.array_equal(graph_move.action, np.asarray(move["action"])), graph_move.index
@@ -294,8 +299,9 @@ def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner)
     from sgim_msgs.msg import Movement, RunStatus
 
     extra = ["--param", f"tolerance_noise={TOLERANCE[learner]}"] if learner in TOLERANCE else []
-    run = finish(run_graph(ros_processes, ros_domain, tmp_path, learner, *extra), tmp_path,
-                 learner)
+    child = run_graph(ros_processes, ros_domain, tmp_path, learner, *extra)
+    later = runner_records_later(learner)
+    run = finish(child, tmp_path, learner)
 
     # Every movement recorded once, in order.
     assert [m.index for m in run.movements] == list(range(1, MOVEMENTS + 1))
@@ -357,7 +363,7 @@ def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner)
 
     # The graph is the single-process learner, movement for movement, and both make the
     # reference run of every machine (tests/golden_runs.py, core/portable.py).
-    records = run_single_process(learner)
+    records = later.result()
     moves = [r for r in records if r["type"] == "movement"]
     assert len(moves) == MOVEMENTS
     assert bag_digest(run.movements) == runner_digest(records) == DIGESTS[learner]
