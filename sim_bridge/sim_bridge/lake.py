@@ -180,6 +180,10 @@ class Lake:
         return next(name for name, poly in zip(ARMS, _ARM_TUPLES, strict=True)
                     if _point_in_polygon(x, y, poly))
 
+    def part_of_outcome(self, outcome) -> str:
+        """The named part a normalised outcome (the learner's units) lies in (part_at)."""
+        return self.part_at(*(float(v) for v in scaling.outcome_to_world(outcome)))
+
     def isolated_centre_radius(self) -> tuple[np.ndarray, float]:
         """The pond in normalised outcome units: centre (2,) and radius."""
         box = scaling.OUTCOME_BOX

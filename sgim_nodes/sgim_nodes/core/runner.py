@@ -121,7 +121,6 @@ def build_world(name: str, seed: int, noise: float | None = None, arm_joints: in
         return World(env, eval_env, benchmark_goals(env, cells=cells), ts.actions,
                      ts.outcomes, env.scale, lambda: make(teacher_seed))
     if name == "fishing":
-        from sim_bridge import scaling
         from sim_bridge.data_files import load_benchmark_goals, load_teaching_set
         from sim_bridge.fishing_world import FishingWorld
         from sim_bridge.lake import lake_with_pond_radius
@@ -130,16 +129,13 @@ def build_world(name: str, seed: int, noise: float | None = None, arm_joints: in
         lake = lake_with_pond_radius(pond_radius)
         if pond_radius is not None:
             kw["lake"] = lake
-
-        def part_of(outcome: np.ndarray) -> str:
-            return lake.part_at(*(float(v) for v in scaling.outcome_to_world(outcome)))
-
         ts = load_teaching_set()
         eval_world = FishingWorld(seed=seed + EVALUATION_SEED_OFFSET, **kw)
         return World(FishingWorld(seed=seed, **kw), eval_world,
                      np.asarray(load_benchmark_goals(), dtype=float),
                      np.asarray(ts.actions, dtype=float), np.asarray(ts.outcomes, dtype=float),
-                     fishing_scale(), lambda: FishingWorld(seed=teacher_seed, **kw), part_of)
+                     fishing_scale(), lambda: FishingWorld(seed=teacher_seed, **kw),
+                     lake.part_of_outcome)
     raise ValueError(f"unknown env {name!r}; choose one of {ENV_NAMES}")
 
 
