@@ -43,6 +43,8 @@ def test_all_strategies_lists_autonomous_then_both_social_ones_per_teacher():
     ("mimicry", "mimicry needs a teacher"),
     ("emulation:", "emulation needs a teacher"),
     ("mimicry:we st", "bad teacher name"),
+    ("mimicry:west-1", "bad teacher name"),  # not a ROS namespace: the node could not be
+    ("emulation:2nd", "bad teacher name"),
     ("mimicry:north", "unknown teacher 'north'; known teachers: west, east"),
 ])
 def test_bad_strategy_names_and_unknown_teachers_are_refused(text, message):

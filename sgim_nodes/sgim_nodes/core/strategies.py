@@ -30,13 +30,16 @@ MIMICRY = "mimicry"
 EMULATION = "emulation"
 KINDS = (AUTONOMOUS, MIMICRY, EMULATION)
 SOCIAL_KINDS = (MIMICRY, EMULATION)
-TEACHER_NAME = re.compile(r"[A-Za-z0-9_-]+")
-"""A teacher's name: letters, digits, '_' and '-' (it appears in strategy names after ':')."""
+TEACHER_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+"""A teacher's name: a letter, then letters, digits and '_'. It appears in strategy names
+after ':', and in the graph each teacher is a node in the namespace of its name, which ROS
+allows no other characters in."""
 
 
 def check_teacher_name(name: str) -> str:
     if not isinstance(name, str) or not TEACHER_NAME.fullmatch(name):
-        raise ValueError(f"bad teacher name {name!r}: use letters, digits, '_' or '-'")
+        raise ValueError(f"bad teacher name {name!r}: use a letter, then letters, digits or "
+                         f"'_' (it names the teacher's ROS namespace)")
     return name
 
 
