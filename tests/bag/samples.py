@@ -77,10 +77,12 @@ def demonstration(index: int, movement_index: int, rng: np.random.Generator,
         help_request=help_request)
 
 
-def help_request(index: int, movement_index: int, rng: np.random.Generator):
+def help_request(index: int, movement_index: int, rng: np.random.Generator,
+                 teacher: str = "", content: str = ""):
     return T["sgim_msgs/msg/HelpRequest"](stamp=stamp(29), index=index,
                                           movement_index=movement_index,
-                                          goal=rng.uniform(-1, 1, 2))
+                                          goal=rng.uniform(-1, 1, 2), teacher=teacher,
+                                          content=content)
 
 
 TEACHING_ENTRIES = 8  # a turn's checks: a teaching set no smaller than any test's limits

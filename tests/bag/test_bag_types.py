@@ -20,7 +20,7 @@ def _one_of_each() -> dict[str, object]:
         "sgim_msgs/msg/Region": samples.region(1, 0, [-1, 0], [0, 1], True),
         "sgim_msgs/msg/RegionMap": samples.region_map(15, split=True),
         "sgim_msgs/msg/Demonstration": samples.demonstration(1, 4, rng),
-        "sgim_msgs/msg/HelpRequest": samples.help_request(2, 150, rng),
+        "sgim_msgs/msg/HelpRequest": samples.help_request(2, 150, rng, "west", "goal-only"),
         "sgim_msgs/msg/TeacherCheck": samples.teacher_checks(150, 2, [0.1, -0.2], 3, rng)[3],
         "sgim_msgs/msg/Evaluation": samples.evaluation(20, rng),
         "sgim_msgs/msg/RunStatus": samples.run_status(5, 10, 2, "stopped by a test"),

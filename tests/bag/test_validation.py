@@ -80,6 +80,11 @@ def test_a_demonstration_from_a_bag_before_the_content_field_showed_both():
     ({"movement_index": 301}, "beyond-budget"), ({"goal": np.zeros(0)}, "size"),
     ({"goal": np.array([0.2, 1.5])}, "out-of-bounds"),
     ({"goal": np.array([np.nan, 0.0])}, "non-finite"),
+    ({"teacher": "west", "content": "goal-only"}, None),  # SGIM-ACTS asking an expert
+    ({"teacher": "centre", "content": "means-and-goal"}, None),
+    ({"teacher": "we-st"}, "bad-value"), ({"teacher": "2nd"}, "bad-value"),
+    ({"content": "means-only"}, "bad-value"),  # a learner asks for what it can use
+    ({"content": "anything"}, "bad-value"),
 ])
 def test_help_requests_are_checked(change, expected):
     ask = samples.help_request(1, 150, RNG)
@@ -103,6 +108,15 @@ def test_the_teachers_empty_word_is_valid_and_an_unknown_source_is_not():
     assert kind("demonstrations", demo) is None
     demo.source = "rogue"
     assert kind("demonstrations", demo) == "bad-value"
+
+
+@pytest.mark.parametrize("source, expected", [
+    ("expert:west", None), ("expert:rough_2", None), ("expert:", "bad-value"),
+    ("expert:we-st", "bad-value"), ("expert: west", "bad-value"), ("west", "bad-value")])
+def test_an_experts_demonstration_names_it(source, expected):
+    demo = samples.demonstration(1, 30, RNG)
+    demo.source = source
+    assert kind("demonstrations", demo) == expected
 
 
 def test_the_packaged_teaching_set_is_known():

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from sgim_nodes.core.environment import PROCESS_CODES, Status
+from sgim_nodes.core.strategies import TEACHER_NAME
 from sgim_nodes.core.teaching import (
     ABILITY,
     DEMONSTRATION_CONTENTS,
@@ -40,6 +41,21 @@ RECORDED_STATUSES = frozenset({Status.OK, Status.NO_CONTACT, Status.PHYSICS_FAIL
 GOAL_MODES = frozenset({1, 2, 3, 4})
 RUN_STATES = frozenset({0, 1, 2})
 SOURCES = frozenset({"automatic", "human", "web"})  # teacher, human_input, web_teacher
+EXPERT_SOURCE = "expert:"
+"""An SGIM-ACTS expert's demonstrations have source "expert:NAME" (teacher/expert_node.py)."""
+
+
+def expert_source(name: str) -> str:
+    return EXPERT_SOURCE + name
+
+
+def source_problem(source: str) -> Problem | None:
+    """A demonstration comes from one of the graph's teachers: SOURCES, or an expert."""
+    if source in SOURCES or (source.startswith(EXPERT_SOURCE)
+                             and TEACHER_NAME.fullmatch(source.removeprefix(EXPERT_SOURCE))):
+        return None
+    return Problem("bad-value", f"source {source!r} is not one of {', '.join(sorted(SOURCES))} "
+                                f"nor an expert's ('{EXPERT_SOURCE}NAME')")
 MAX_ATTEMPT = 255  # Movement.attempt is a uint8
 LIMITS_KEY = "sgim_validation_limits"  # the recorder's limits, in a bag's custom_data
 
@@ -213,9 +229,9 @@ def check_demonstration(d: Any, limits: Limits) -> Problem | None:
     """An empty action and outcome is the automatic teacher's "nothing left to show". Otherwise
     the demonstration shows exactly what its `content` says: both parts (means-and-goal), the
     outcome and no action (goal-only), or the action and no outcome (means-only)."""
-    if str(d.source) not in SOURCES:
-        return Problem("bad-value", f"source {str(d.source)!r} is not one of "
-                                    f"{', '.join(sorted(SOURCES))}")
+    problem = source_problem(str(d.source))
+    if problem:
+        return problem
     content = demonstration_content(d)
     if content not in DEMONSTRATION_CONTENTS:
         return Problem("bad-value", f"content {content!r} is not one of "
@@ -246,11 +262,26 @@ def check_demonstration(d: Any, limits: Limits) -> Problem | None:
                 vector_problem(d.outcome, limits.outcome_size, "demonstrated outcome")))
 
 
+ASKABLE_CONTENTS = ("", MEANS_AND_GOAL, GOAL_ONLY)
+"""What a HelpRequest may ask to be shown: the teacher's own setting, the action and its
+outcome (mimicry) or the outcome only (emulation)."""
+
+
 def check_help_request(h: Any, limits: Limits) -> Problem | None:
     """A learner's ask (HelpRequest): a 1-based index, a count within the budget (it asks
-    before a movement, so below it), and the goal it asks about."""
+    before a movement, so below it), the goal it asks about, and, when it names them, a
+    teacher's valid name and what it asks to be shown (fields a bag of an older graph lacks)."""
     if int(h.index) < 1:
         return Problem("bad-value", f"help request index {int(h.index)} must be >= 1")
+    teacher = str(getattr(h, "teacher", ""))
+    if teacher and not TEACHER_NAME.fullmatch(teacher):
+        return Problem("bad-value", f"help request to teacher {teacher!r}: not a teacher's "
+                                    f"name (a letter, then letters, digits or '_')")
+    content = str(getattr(h, "content", ""))
+    if content not in ASKABLE_CONTENTS:
+        return Problem("bad-value", f"help request asking for {content!r}: ask for "
+                                    f"{MEANS_AND_GOAL!r}, {GOAL_ONLY!r} or nothing (the "
+                                    f"teacher's own setting)")
     problem = _index_problem(h.movement_index, "movement index", limits)
     if problem is None and limits.budget and int(h.movement_index) >= limits.budget:
         problem = Problem("beyond-budget", f"an ask at movement {int(h.movement_index)}: the "

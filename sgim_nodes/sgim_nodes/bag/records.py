@@ -115,13 +115,16 @@ class DemonstrationRecord:
 
 @dataclass
 class HelpRequestRecord:
-    """The learner asked its teacher for help (timing on-request, HelpRequest.msg)."""
+    """The learner asked a teacher for help (timing on-request, or SGIM-ACTS asking one of
+    its experts; HelpRequest.msg)."""
 
     time_ns: int
     stamp_ns: int
     index: int
     movement_index: int
     goal: np.ndarray
+    teacher: str = ""  # the expert asked; "": the run's automatic teacher
+    content: str = ""  # what it asked to be shown; "": the teacher's own setting
 
 
 @dataclass
@@ -251,7 +254,8 @@ def to_record(kind: type, time_ns: int, m) -> object:
                                    str(getattr(m, "content", "means-and-goal")),
                                    int(getattr(m, "help_request", 0)))
     if kind is HelpRequestRecord:
-        return HelpRequestRecord(t, s, int(m.index), int(m.movement_index), _vec(m.goal))
+        return HelpRequestRecord(t, s, int(m.index), int(m.movement_index), _vec(m.goal),
+                                 str(getattr(m, "teacher", "")), str(getattr(m, "content", "")))
     if kind is TeacherCheckRecord:
         return TeacherCheckRecord(t, s, int(m.movement_index), int(m.help_request),
                                   _vec(m.asked_goal), str(m.rule), str(m.choice),
