@@ -28,6 +28,7 @@ setup(
             "teacher = teacher.teacher_node:main",
             "human_input = teacher.human_input_node:main",
             "web_teacher = teacher.web_teacher_node:main",
+            "expert = teacher.expert_node:main",
         ],
     },
 )

@@ -78,6 +78,9 @@ NODES = {spec.name: spec for spec in (
     NodeSpec("teacher", "teacher", "teacher.teacher_node"),
     NodeSpec("teacher", "human_input", "teacher.human_input_node", interactive=True),
     NodeSpec("teacher", "web_teacher", "teacher.web_teacher_node"),
+    # SGIM-ACTS's teachers (issue 33): one per name, each in its namespace; no learner's
+    # graph starts them yet (the arbiter's requests to them come next).
+    NodeSpec("teacher", "expert", "teacher.expert_node"),
     NodeSpec("sgim_nodes", "social_interaction", "sgim_nodes.nodes.social_interaction"),
 )}
 ARBITER = "social_interaction"
