@@ -45,10 +45,10 @@ from sgim_nodes.core.teaching import GOAL_ONLY, MEANS_AND_GOAL, MEANS_ONLY
 from sgim_nodes.nodes.ros_glue import COMMON_PARAMS, floats, run_node, vec, world_scale
 from sgim_ros import qos
 from sgim_ros.params import Param, ParameterError, declare, non_negative
-from sim_bridge.data_files import load_teaching_set
 from sim_bridge.data_params import TEACHING_SET_FILE
 from sim_bridge.fishing_world import DEFAULT_NOISE, FishingWorld
 from sim_bridge.lake import Lake
+from teacher.teaching_set import load_checked
 
 WORLD_EXPERTS = {spec.name: spec for spec in FISHING_EXPERTS}
 
@@ -98,12 +98,7 @@ class ExpertNode(Node):
             spec = expert_spec(name, p["part"], p["precision"], p["radius_size"])
         except ValueError as error:
             raise ParameterError(f"expert: {error}") from error
-        ts = load_teaching_set(p["teaching_set"] or None)
-        if ts.actions.shape[1] != p["action_size"] or ts.outcomes.shape[1] != p["outcome_size"]:
-            raise ParameterError(f"teaching set of {ts.actions.shape[1]}-number actions and "
-                                 f"{ts.outcomes.shape[1]}-number outcomes does not fit "
-                                 f"action_size {p['action_size']}, outcome_size "
-                                 f"{p['outcome_size']}")
+        ts = load_checked(p["teaching_set"], p["action_size"], p["outcome_size"])
         part_of = Lake().part_of_outcome
         self.world = FishingWorld(seed=world_seed(p["seed"], "teacher-world"), noise=p["noise"])
         try:

@@ -77,11 +77,11 @@ from sgim_nodes.nodes.ros_glue import (
     world_scale,
 )
 from sgim_ros import qos
-from sgim_ros.params import Param, ParameterError, at_least, non_negative, one_of
+from sgim_ros.params import Param, at_least, non_negative, one_of
 from sgim_ros.ready import serve_ready
-from sim_bridge.data_files import load_teaching_set
 from sim_bridge.data_params import TEACHING_SET_FILE
 from sim_bridge.fishing_world import DEFAULT_NOISE, FishingWorld
+from teacher.teaching_set import load_checked
 
 AUTOMATIC = "automatic"  # Demonstration.source of this node's demonstrations
 PARAMS = learner_node_params(
@@ -117,12 +117,7 @@ class TeacherNode(Node):
     def __init__(self) -> None:
         super().__init__("teacher")
         p, config = declare_learner(self, PARAMS)
-        ts = load_teaching_set(p["teaching_set"] or None)
-        if ts.actions.shape[1] != p["action_size"] or ts.outcomes.shape[1] != p["outcome_size"]:
-            raise ParameterError(f"teaching set of {ts.actions.shape[1]}-number actions and "
-                                 f"{ts.outcomes.shape[1]}-number outcomes does not fit "
-                                 f"action_size {p['action_size']}, outcome_size "
-                                 f"{p['outcome_size']}")
+        ts = load_checked(p["teaching_set"], p["action_size"], p["outcome_size"])
         self.teacher = Teacher(ts.actions, ts.outcomes, component_rng(p["seed"], "teacher"),
                                p["demonstration_period"],
                                p["tolerance_noise"] * p["outcome_noise"],
