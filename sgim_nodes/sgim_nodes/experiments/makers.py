@@ -16,6 +16,7 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from multiprocessing import get_context
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -160,7 +161,10 @@ def _execute(todo: list[Any], work: Callable, keep: Callable, parallel: int,
         for index, job in enumerate(todo, 1):
             finished(index, job, lambda job=job: work(job))
     else:
-        with ProcessPoolExecutor(parallel) as pool:
+        # Spawned, not forked: the calling process may hold threads (rclpy's, Ray's, a test
+        # worker's), and a forked child that collects their objects can crash (seen under
+        # load: a segmentation fault in the child's garbage collection).
+        with ProcessPoolExecutor(parallel, mp_context=get_context("spawn")) as pool:
             futures = {pool.submit(work, job): job for job in todo}
             for index, future in enumerate(as_completed(futures), 1):
                 finished(index, futures[future], future.result)
