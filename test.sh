@@ -32,16 +32,17 @@ fi
 # shellcheck disable=SC1091
 source ros_ws/env.sh
 ruff check .
-# One worker more than the cores: the graph tests spend part of their time waiting (for
-# discovery, a teacher's turn, a timeout they test), and a third worker fills those waits
-# (2 cores: 636 s against 694 s of pytest, docs/notes/measurements.md).
-workers="${SGIM_TEST_WORKERS:-$(( $(nproc) + 1 ))}"
 if [[ $quick == 1 ]]; then
+  # Pure Python, bound by the CPU: one worker per core.
+  workers="${SGIM_TEST_WORKERS:-$(nproc)}"
   # A test that reaches for a ROS domain here fails: it lacks its `ros` mark (tests/conftest.py).
-  SGIM_TEST_QUICK=1 python -m pytest -q --timeout=600 -n "${SGIM_TEST_WORKERS:-$(nproc)}" \
-    -m "not ros and not slow" \
+  SGIM_TEST_QUICK=1 python -m pytest -q --timeout=600 -n "$workers" -m "not ros and not slow" \
     "$@"
 else
+  # One worker more than the cores: the graph tests spend part of their time waiting (for
+  # discovery, a teacher's turn, a timeout they test), and the extra worker fills those waits
+  # (2 cores: 636 s against 694 s of pytest, docs/notes/measurements.md).
+  workers="${SGIM_TEST_WORKERS:-$(( $(nproc) + 1 ))}"
   # ROS tests must run here: a missing rclpy or sgim_msgs is an error, not a skip.
   SGIM_REQUIRE_ROS=1 python -m pytest -q --timeout=600 -n "$workers" "$@"
 fi

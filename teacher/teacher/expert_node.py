@@ -94,7 +94,7 @@ class ExpertNode(Node):
         p = declare(self, PARAMS)
         name = p["name"] or self.get_namespace().strip("/").rsplit("/", 1)[-1]
         try:
-            self.name_ = check_teacher_name(name)
+            self.teacher_name = check_teacher_name(name)
             spec = expert_spec(name, p["part"], p["precision"], p["radius_size"])
         except ValueError as error:
             raise ParameterError(f"expert: {error}") from error
@@ -130,7 +130,7 @@ class ExpertNode(Node):
                                    f"{self.shown} with a demonstration")
 
     def _on_request(self, msg: HelpRequest) -> None:
-        if msg.teacher != self.name_ or self.gate.check("help_requests", msg):
+        if msg.teacher != self.teacher_name or self.gate.check("help_requests", msg):
             return
         if msg.index in self.answered:
             self.get_logger().warning(f"help request {msg.index} again: answered once only")

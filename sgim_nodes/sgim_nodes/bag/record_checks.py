@@ -43,19 +43,6 @@ RUN_STATES = frozenset({0, 1, 2})
 SOURCES = frozenset({"automatic", "human", "web"})  # teacher, human_input, web_teacher
 EXPERT_SOURCE = "expert:"
 """An SGIM-ACTS expert's demonstrations have source "expert:NAME" (teacher/expert_node.py)."""
-
-
-def expert_source(name: str) -> str:
-    return EXPERT_SOURCE + name
-
-
-def source_problem(source: str) -> Problem | None:
-    """A demonstration comes from one of the graph's teachers: SOURCES, or an expert."""
-    if source in SOURCES or (source.startswith(EXPERT_SOURCE)
-                             and TEACHER_NAME.fullmatch(source.removeprefix(EXPERT_SOURCE))):
-        return None
-    return Problem("bad-value", f"source {source!r} is not one of {', '.join(sorted(SOURCES))} "
-                                f"nor an expert's ('{EXPERT_SOURCE}NAME')")
 MAX_ATTEMPT = 255  # Movement.attempt is a uint8
 LIMITS_KEY = "sgim_validation_limits"  # the recorder's limits, in a bag's custom_data
 
@@ -223,6 +210,19 @@ def demonstration_content(d: Any) -> str:
     """What a demonstration shows (Demonstration.content); a record from a bag recorded before
     the field existed has none, and showed both (the paper's SGIM-D)."""
     return str(getattr(d, "content", MEANS_AND_GOAL))
+
+
+def expert_source(name: str) -> str:
+    return EXPERT_SOURCE + name
+
+
+def source_problem(source: str) -> Problem | None:
+    """A demonstration comes from one of the graph's teachers: SOURCES, or an expert."""
+    if source in SOURCES or (source.startswith(EXPERT_SOURCE)
+                             and TEACHER_NAME.fullmatch(source.removeprefix(EXPERT_SOURCE))):
+        return None
+    return Problem("bad-value", f"source {source!r} is not one of {', '.join(sorted(SOURCES))} "
+                                f"nor an expert's ('{EXPERT_SOURCE}NAME')")
 
 
 def check_demonstration(d: Any, limits: Limits) -> Problem | None:
