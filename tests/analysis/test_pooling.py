@@ -115,3 +115,20 @@ def test_groups_that_differ_in_their_settings_are_still_analysed_apart(make_stud
         loaded = load_study(study)
     assert len(loaded.learners) == 2 and unlike_runs(loaded) == []
 
+
+
+def test_a_learners_own_code_must_agree_within_its_group_only(make_study, tmp_path: Path,
+                                                            capsys: pytest.CaptureFixture) -> None:
+    """SGIM-ACTS's own modules count in its runs' learner_code alone: other learners' runs
+    have none, and may be compared with it; two versions of it in one group may not."""
+    own = {f"sgim-d-seed{s}": fingerprint(learner_code="ac750000") for s in range(3)}
+    own["sgim-d-seed1"] = fingerprint(learner_code="0ther")
+    study = make_study(fingerprints=own)
+    err = _refused(study, tmp_path, capsys)
+    assert "learner_code of 'sgim-d': ac750000 in 2 runs (sgim-d-seed0, sgim-d-seed2), " \
+           "0ther in 1 run (sgim-d-seed1)" in err
+    meta_file = study / "sgim-d-seed1" / "metadata.yaml"
+    meta = yaml.safe_load(meta_file.read_text())
+    meta["fingerprint"] = fingerprint(learner_code="ac750000")
+    meta_file.write_text(yaml.safe_dump(meta))
+    assert unlike_runs(load_study(study)) == []  # the random runs have none: still alike

@@ -132,3 +132,47 @@ def test_a_reports_own_pages_and_figures_do_not_make_the_tree_dirty(tmp_path):
     assert git_state(tmp_path)[1] is True
     (tmp_path / "code.py").write_text("after\n")
     assert git_state(tmp_path, outputs)[1] is True
+
+
+OWN_MODULES_SCRIPT = """
+import sys
+from sgim_nodes.core.runner import main
+from sgim_nodes.provenance.fingerprint import LEARNER_MODULES
+learner, output = sys.argv[1], sys.argv[2]
+code = main(["--env", "planar-arm", "--learner", learner, "--movements", "40",
+             "--eval-every", "20", "--seed", "3", "--quiet", "--output", output])
+loaded = {m.rsplit(".", 1)[-1] for m in sys.modules if m.startswith("sgim_nodes.core.")}
+for owner, names in LEARNER_MODULES.items():
+    print(owner, sorted(loaded & set(names)))
+sys.exit(code)
+"""
+
+
+@pytest.mark.parametrize("learner", ["sgim-d", "demo-only", "sgim-acts"])
+def test_a_learners_own_modules_are_imported_by_its_runs_only(learner, tmp_path):
+    """The claim that lets work on SGIM-ACTS leave the other learners' pages fresh: a run of
+    another learner never imports LEARNER_MODULES, so those modules cannot change it."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", OWN_MODULES_SCRIPT, learner,
+                           str(tmp_path / "run.jsonl")], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr
+    loaded = dict(line.split(" ", 1) for line in done.stdout.splitlines() if line)
+    for owner, names in fp.LEARNER_MODULES.items():
+        expected = sorted(names) if owner == learner else []
+        assert loaded[owner] == str(expected), (owner, loaded[owner])
+
+
+def test_only_the_learners_own_code_is_in_its_learner_code_field():
+    own = fp.fingerprint(fp.runner_parameters("planar-arm", "sgim-acts", {}, {}))
+    other = fp.fingerprint(fp.runner_parameters("planar-arm", "sgim-d", {}, {}))
+    assert other.fields["learner_code"] == "" and len(own.fields["learner_code"]) == 16
+    assert other.fields["code"] == own.fields["code"] == fp.environment()["code"]
+    assert own.differences(other) == ["learner_code", "parameters (learner)"]
+    shared = {p.stem for p in fp.shared_core_files()}
+    assert "runner" in shared and not shared & set(fp.LEARNER_MODULES["sgim-acts"])
+    assert fp.learner_of({"arbiter": {"learner": "sgim-d"}, "simulator": {}}) == "sgim-d"
+    with pytest.raises(ValueError, match="several learners"):
+        fp.learner_of({"a": {"learner": "sgim-d"}, "b": {"learner": "random"}})

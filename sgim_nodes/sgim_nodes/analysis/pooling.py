@@ -101,7 +101,8 @@ def _parameters_unlike(group: str, prints: dict[str, Fingerprint]) -> Unlike | N
 def unlike_runs(study: Study) -> list[Unlike]:
     """Every way the study's runs are not alike, empty when they may be pooled: fingerprints
     missing (from all runs or some), an environment field that differs across the study, a
-    run resumed by another learner, or a group whose runs differ in their parameters."""
+    run resumed by another learner, or a group whose runs differ in their learner's own code
+    or their parameters."""
     runs = sorted(study.runs, key=lambda r: r.name)
     prints = {r.name: run_fingerprint(r) for r in runs}
     found = {name: fp for name, fp in prints.items() if fp is not None}
@@ -126,6 +127,9 @@ def unlike_runs(study: Study) -> list[Unlike]:
         out.append(Unlike("resumed by another learner", _holders(resumed)))
     for group in study.learners:
         members = {r.name: found[r.name] for r in study.runs_of(group) if r.name in found}
+        own_code = {name: fp.fields.get("learner_code", NONE) for name, fp in members.items()}
+        if len(set(own_code.values())) > 1:
+            out.append(Unlike(f"learner_code of '{group}'", _holders(own_code)))
         unlike = _parameters_unlike(group, members)
         if unlike:
             out.append(unlike)

@@ -4,7 +4,10 @@ Why: a figure is only worth what its runs are, and runs of another learner, worl
 must never be pooled or reused as if they were alike. The fingerprint holds, each as a field
 of its own so that a difference can be named:
 
-- ``code``: the learner's core (sgim_nodes/core/*.py);
+- ``code``: the learner's core (sgim_nodes/core/*.py) that every learner runs through;
+- ``learner_code``: the core modules that only the run's learner runs through
+  (LEARNER_MODULES: SGIM-ACTS's strategies, teachers and loop), empty for the others, so that
+  work on one learner does not make the pages of the others stale;
 - ``world``: the fishing world's modules (sim_bridge: the cast, the lake, the scaling, the
   data loaders);
 - ``data``: the world's data files (map, benchmark goals, teaching set, floor), by content;
@@ -33,7 +36,11 @@ from pathlib import Path
 from typing import Any
 
 ENVIRONMENT_FIELDS = ("code", "world", "data", "numpy", "scipy", "pybullet", "python")
-FIELDS = (*ENVIRONMENT_FIELDS, "parameters")
+FIELDS = (*ENVIRONMENT_FIELDS, "learner_code", "parameters")
+LEARNER_MODULES = {"sgim-acts": ("acts_learner", "acts_runner", "experts", "strategies",
+                                 "strategy_choice", "strategy_regions")}
+"""Core modules only one learner imports (tests/provenance/test_fingerprint.py checks that a
+run of any other learner does not): they count in that learner's ``learner_code`` only."""
 LIBRARIES = ("numpy", "scipy", "pybullet")
 WORLD_MODULES = ("bezier", "data_files", "fishing_world", "lake", "rod_urdf", "scaling")
 """The sim_bridge modules a cast runs through (not its node, renderer or tools)."""
@@ -96,6 +103,22 @@ def core_files() -> list[Path]:
     return sorted(Path(core.__file__).parent.glob("*.py"))
 
 
+def _own_modules() -> set[str]:
+    return {name for names in LEARNER_MODULES.values() for name in names}
+
+
+def shared_core_files() -> list[Path]:
+    """The core modules every learner runs through (all but LEARNER_MODULES)."""
+    return [f for f in core_files() if f.stem not in _own_modules()]
+
+
+@cache
+def learner_code(learner: str | None) -> str:
+    """The digest of the core modules only this learner runs through ("" when none)."""
+    names = LEARNER_MODULES.get(learner or "", ())
+    return source_digest([f for f in core_files() if f.stem in names]) if names else ""
+
+
 def world_files() -> list[Path]:
     import sim_bridge
 
@@ -126,7 +149,7 @@ def library_versions() -> dict[str, str]:
 def environment() -> dict[str, str]:
     """The fields every run of this checkout shares (computed once per process)."""
     data = data_files()
-    return {"code": source_digest(core_files()), "world": source_digest(world_files()),
+    return {"code": source_digest(shared_core_files()), "world": source_digest(world_files()),
             "data": _digest(f"{name}:{file_digest(path)}".encode()
                             for name, path in sorted(data.items())),
             **library_versions()}
@@ -192,11 +215,22 @@ def parameter_differences(a: Mapping[str, Any], b: Mapping[str, Any]) -> list[st
     return list(dict.fromkeys(sorted(out)))
 
 
+def learner_of(parameters: Mapping[str, Any]) -> str | None:
+    """The ``learner`` parameter: at the top (a runner's run) or of a node (a graph's)."""
+    if isinstance(parameters.get("learner"), str):
+        return parameters["learner"]
+    found = {v["learner"] for v in parameters.values()
+             if isinstance(v, Mapping) and isinstance(v.get("learner"), str)}
+    if len(found) > 1:
+        raise ValueError(f"the nodes name several learners: {sorted(found)}")
+    return found.pop() if found else None
+
+
 def fingerprint(parameters: Mapping[str, Any]) -> Fingerprint:
     """The fingerprint of a run of this checkout with these shaping parameters."""
     params = json.loads(canonical(parameters))
-    return Fingerprint({**environment(), "parameters": _digest([canonical(params).encode()])},
-                       params)
+    return Fingerprint({**environment(), "learner_code": learner_code(learner_of(params)),
+                        "parameters": _digest([canonical(params).encode()])}, params)
 
 
 def graph_parameters(node_parameters: Mapping[str, Mapping[str, Any]],
