@@ -102,7 +102,6 @@ class ExpertNode(Node):
         part_of = Lake().part_of_outcome
         self.world = FishingWorld(seed=world_seed(p["seed"], "teacher-world"), noise=p["noise"])
         try:
-            self.rows = spec.rows(ts.outcomes, part_of)
             [self.expert] = build_experts([spec], ts.actions, ts.outcomes, p["seed"],
                                           world_scale(p).size, lambda: self.world,
                                           part_of).values()
@@ -119,7 +118,8 @@ class ExpertNode(Node):
         self.create_subscription(RunStatus, "/run_status", self._on_status, qos.RECORDS)
         radius = ("no radius" if math.isinf(self.expert.radius)
                   else f"radius {self.expert.radius:g}")
-        self.get_logger().info(f"expert {name}: {len(self.rows)} demonstrations ({spec.part}), "
+        self.get_logger().info(f"expert {name}: {len(self.expert.rows)} demonstrations "
+                               f"({spec.part}), "
                                f"precision {spec.precision:g}, {radius}")
 
     def _on_status(self, msg: RunStatus) -> None:
@@ -153,7 +153,7 @@ class ExpertNode(Node):
         outcome = None if answer is None else answer.outcome
         if action is None and outcome is None:  # none there, or an emulation's cast on land
             why = ("none there" if answer is None else
-                   f"entry {int(self.rows[answer.index])}'s cast gave no outcome to show")
+                   f"entry {answer.index}'s cast gave no outcome to show")
             self.get_logger().info(f"help request {ask.index}: {why} (goal "
                                    f"{np.round(vec(ask.goal), 3)})")
             return msg
@@ -161,7 +161,7 @@ class ExpertNode(Node):
             msg.content = MEANS_ONLY
         self.shown += 1
         msg.index = self.shown
-        msg.teaching_set_index = int(self.rows[answer.index])
+        msg.teaching_set_index = answer.index
         msg.action = [] if action is None else floats(action)
         msg.outcome = [] if outcome is None else floats(outcome)
         self.get_logger().info(f"help request {ask.index}: entry {msg.teaching_set_index} "

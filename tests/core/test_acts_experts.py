@@ -90,6 +90,11 @@ def test_the_arms_experts_split_the_teaching_set_by_region():
     assert len(west.outcomes) + len(east.outcomes) == len(rough.outcomes) == len(TS.outcomes)
     assert west.outcomes[:, 0].max() < east.outcomes[:, 0].min()
     assert rough.precision > 0 and west.precision == east.precision == 0
+    # an answer names the world's teaching-set row, as every demonstration does
+    row = int(east.rows[3])
+    answer = east.answer(TS.outcomes[row], with_action=False)
+    assert answer.index == row and np.array_equal(answer.outcome, TS.outcomes[row])
+    assert np.array_equal(east.actions[3], TS.actions[row]) and row != 3
     with pytest.raises(ValueError, match="part must be all"):
         ExpertSpec("x", "left").rows(TS.outcomes)
     with pytest.raises(ValueError, match="distinct"):
@@ -132,7 +137,7 @@ def test_the_rough_fishing_teacher_lands_about_two_noise_units_off():
         for goal in np.repeat(expert.outcomes, 2, axis=0):
             answer = expert.answer(goal)
             if answer is not None and answer.outcome is not None:
-                out.append(np.linalg.norm(answer.outcome - expert.outcomes[answer.index]))
+                out.append(np.linalg.norm(answer.outcome - goal))  # its own outcome
         return np.array(out) / noise
 
     rough, precise = offsets("rough"), np.concatenate([offsets("centre"), offsets("west")])

@@ -5,7 +5,8 @@ Unlike the periodic teacher (teaching.py), which decides when to speak and what 
 has not reached, an expert only answers: the learner chooses whom to ask and about what.
 
 - ``actions``, ``outcomes``: the expert's teaching set, usually a part of the world's (e.g.
-  the demonstrations of one region: an expert of that region);
+  the demonstrations of one region: an expert of that region), and ``rows``: their rows in
+  the world's teaching set, the index its answers name (as every demonstration names one);
 - ``radius``: an expert whose nearest demonstration lies farther than this from the asked
   goal answers "none there" (None); the learner still paid for the request;
 - ``precision``: the standard deviation (action units, per action number) of the Gaussian
@@ -34,7 +35,8 @@ from .strategies import check_teacher_name
 
 @dataclass(frozen=True)
 class ExpertAnswer:
-    """A demonstration given on request: which row, the action shown (None when only the
+    """A demonstration given on request: which row of the world's teaching set, the action
+    shown (None when only the
     outcome was asked for: emulation), where it landed (None when the expert's cast gave no
     outcome) and how far the row's teaching outcome lies from the asked goal."""
 
@@ -58,10 +60,16 @@ class Expert:
 
     def __init__(self, name: str, actions: np.ndarray, outcomes: np.ndarray,
                  rng: np.random.Generator, precision: float = 0.0,
-                 radius: float = math.inf, world: Environment | None = None) -> None:
+                 radius: float = math.inf, world: Environment | None = None,
+                 rows: Sequence[int] | None = None) -> None:
         self.name = check_teacher_name(name)
         self.actions = np.asarray(actions, dtype=float)
         self.outcomes = np.asarray(outcomes, dtype=float)
+        self.rows = (np.arange(len(self.actions)) if rows is None
+                     else np.asarray(rows, dtype=int))
+        if len(self.rows) != len(self.actions):
+            raise ValueError(f"expert {name!r}: {len(self.rows)} rows for "
+                             f"{len(self.actions)} demonstrations")
         if self.actions.ndim != 2 or self.outcomes.ndim != 2 or len(self.actions) == 0 or (
                 len(self.actions) != len(self.outcomes)):
             raise ValueError(f"expert {name!r}: a teaching set needs as many actions as "
@@ -82,7 +90,8 @@ class Expert:
         self.n_unanswered = 0
 
     def nearest(self, goal: np.ndarray) -> tuple[int, float]:
-        """The row whose teaching outcome lies nearest ``goal`` (lowest row on ties)."""
+        """The position, in its own teaching set, of the outcome nearest ``goal`` (the
+        lowest on ties), and its distance."""
         gap = self.outcomes - np.asarray(goal, dtype=float)[None, :]
         d = np.sqrt((gap * gap).sum(axis=1))
         i = int(np.argmin(d))
@@ -106,7 +115,8 @@ class Expert:
             result = self.world.execute(shown)
             outcome = (np.asarray(result.outcome, dtype=float).copy() if is_success(result)
                        else None)
-        return ExpertAnswer(self.name, i, shown if with_action else None, outcome, distance)
+        return ExpertAnswer(self.name, int(self.rows[i]), shown if with_action else None,
+                            outcome, distance)
 
 
 @dataclass(frozen=True)
@@ -190,5 +200,5 @@ def build_experts(specs: Sequence[ExpertSpec], actions: np.ndarray, outcomes: np
         experts[spec.name] = Expert(spec.name, np.asarray(actions)[rows],
                                     np.asarray(outcomes)[rows],
                                     member_rng(seed, "experts", spec.name), spec.precision,
-                                    spec.radius_size * box_size, world)
+                                    spec.radius_size * box_size, world, rows)
     return experts
