@@ -37,16 +37,17 @@ def movement(index: int, rng: np.random.Generator, process: int = 0, status: int
 
 def goal(index: int, movement_index: int, rng: np.random.Generator):
     return T["sgim_msgs/msg/Goal"](stamp=stamp(7), index=index, movement_index=movement_index,
-                                   point=rng.uniform(-1, 1, 2), region_id=index % 3, mode=1)
+                                   point=rng.uniform(-1, 1, 2), region_id=index % 3, mode=1,
+                                   strategy="")
 
 
 def competence(goal_index: int, movement_index: int, rng: np.random.Generator,
-               from_demonstration: bool = False):
+               from_demonstration: bool = False, strategy: str = ""):
     return T["sgim_msgs/msg/Competence"](
         stamp=stamp(9), goal_index=goal_index, movement_index=movement_index,
         goal=rng.uniform(-1, 1, 2), reached=rng.uniform(-1, 1, 2),
         competence=float(-rng.uniform(0, 1)), movements_used=5,
-        from_demonstration=from_demonstration)
+        from_demonstration=from_demonstration, strategy=strategy)
 
 
 def region(rid: int, parent: int, lower, upper, leaf: bool):

@@ -134,6 +134,32 @@ def test_bad_competences_are_refused(goal, value, expected):
     assert kind("competences", comp) == expected
 
 
+@pytest.mark.parametrize("strategy, used, reached, value, expected", [
+    ("emulation:west", 0, [], -1.0, None),  # SGIM-ACTS: "none there", no movement
+    ("mimicry:rough", 5, [0.1, 0.2], -0.3, None),
+    ("autonomous", 3, [0.1, 0.2], -0.3, None),
+    ("autonomous", 0, [], -1.0, "bad-value"),  # only a social episode may spend nothing
+    ("", 0, [], -1.0, "bad-value"),
+    ("mimicry:west", 0, [0.1, 0.2], -1.0, "bad-value"),  # nothing moved, nothing reached
+    ("mimicry:west", 0, [], -0.5, "bad-value"),
+    ("imitate:west", 2, [0.1, 0.2], -0.5, "bad-value"),
+    ("mimicry:9west", 2, [0.1, 0.2], -0.5, "bad-value")])
+def test_a_competence_names_a_strategy_and_spends_movements(strategy, used, reached, value,
+                                                              expected):
+    comp = samples.competence(1, 10, RNG, strategy=strategy)
+    comp.movements_used, comp.reached, comp.competence = used, np.asarray(reached), value
+    assert kind("competences", comp) == expected
+
+
+@pytest.mark.parametrize("strategy, expected", [
+    ("", None), ("autonomous", None), ("emulation:centre", None), ("mimicry:", "bad-value"),
+    ("autonomous:x", "bad-value")])
+def test_a_goal_names_a_known_kind_of_strategy(strategy, expected):
+    goal = samples.goal(1, 10, RNG)
+    goal.strategy = strategy
+    assert kind("goals", goal) == expected
+
+
 def test_bad_movements_are_refused():
     good = samples.movement(1, RNG)
     assert kind("movements", good) is None

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -45,6 +46,9 @@ EXPERT_SOURCE = "expert:"
 """An SGIM-ACTS expert's demonstrations have source "expert:NAME" (teacher/expert_node.py)."""
 MAX_ATTEMPT = 255  # Movement.attempt is a uint8
 LIMITS_KEY = "sgim_validation_limits"  # the recorder's limits, in a bag's custom_data
+
+STRATEGY_NAME = re.compile(rf"autonomous|(mimicry|emulation):(?:{TEACHER_NAME.pattern})")
+"""A Goal's or Competence's strategy (core/strategies.py Strategy.name)."""
 
 
 @dataclass(frozen=True)
@@ -190,15 +194,28 @@ def check_goal(g: Any, limits: Limits) -> Problem | None:
         return Problem("bad-value", f"goal mode {int(g.mode)} is unknown")
     if int(g.region_id) < -1:
         return Problem("bad-value", f"region id {int(g.region_id)} must be >= -1")
+    strategy = str(getattr(g, "strategy", ""))
+    if strategy and not STRATEGY_NAME.fullmatch(strategy):
+        return Problem("bad-value", f"strategy {strategy!r} is not autonomous, mimicry:NAME "
+                                    "or emulation:NAME")
     return (_index_problem(g.index, "goal index", limits, low=1)
             or _index_problem(g.movement_index, "movement index", limits)
             or vector_problem(g.point, limits.outcome_size, "goal point"))
 
 
 def check_competence(c: Any, limits: Limits) -> Problem | None:
+    """An attempted goal spent at least one movement, but for SGIM-ACTS's episode whose
+    teacher had nothing to show ("none there"): no movement, nothing reached, competence -1."""
     used = int(c.movements_used)
-    if used < 1 or (limits.budget and used > limits.budget):
-        return Problem("bad-value", f"movements_used {used} must be >= 1 and within the budget")
+    strategy = str(getattr(c, "strategy", ""))
+    none_there = (used == 0 and ":" in strategy and not len(c.reached)
+                  and float(c.competence) == -1.0)
+    if (used < 1 and not none_there) or (limits.budget and used > limits.budget):
+        return Problem("bad-value", f"movements_used {used} must be >= 1 and within the budget"
+                                    " (0 only for a social episode without an answer)")
+    if strategy and not STRATEGY_NAME.fullmatch(strategy):
+        return Problem("bad-value", f"strategy {strategy!r} is not autonomous, mimicry:NAME "
+                                    "or emulation:NAME")
     return (_index_problem(c.movement_index, "movement index", limits)
             or vector_problem(c.goal, limits.outcome_size, "goal")
             or vector_problem(c.reached, limits.outcome_size, "reached outcome",
@@ -376,7 +393,7 @@ def check_evaluation(e: Any, limits: Limits) -> Problem | None:
 
 
 def check_run_status(s: Any, limits: Limits) -> Problem | None:
-    from sgim_nodes.core.learners import LEARNER_NAMES
+    from sgim_nodes.core.learners import CORE_LEARNER_NAMES as LEARNER_NAMES
 
     if int(s.state) not in RUN_STATES:
         return Problem("bad-value", f"state {int(s.state)} is unknown")

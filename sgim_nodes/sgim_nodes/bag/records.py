@@ -47,6 +47,7 @@ class GoalRecord:
     point: np.ndarray
     region_id: int
     mode: int
+    strategy: str = ""  # SGIM-ACTS: how it chose to learn toward it; "" for the others
 
 
 @dataclass
@@ -60,6 +61,7 @@ class CompetenceRecord:
     competence: float
     movements_used: int
     from_demonstration: bool
+    strategy: str = ""  # SGIM-ACTS: the episode's strategy; "" for the others
 
 
 @dataclass
@@ -240,11 +242,11 @@ def to_record(kind: type, time_ns: int, m) -> object:
                               signature_of(m))
     if kind is GoalRecord:
         return GoalRecord(t, s, int(m.index), int(m.movement_index), _vec(m.point),
-                          int(m.region_id), int(m.mode))
+                          int(m.region_id), int(m.mode), str(getattr(m, "strategy", "")))
     if kind is CompetenceRecord:
         return CompetenceRecord(t, s, int(m.goal_index), int(m.movement_index), _vec(m.goal),
                                 _vec(m.reached), float(m.competence), int(m.movements_used),
-                                bool(m.from_demonstration))
+                                bool(m.from_demonstration), str(getattr(m, "strategy", "")))
     if kind is RegionMapRecord:
         return RegionMapRecord(t, s, int(m.movement_index), int(m.split_count),
                                int(m.goal_count), [_region(r) for r in m.regions])
