@@ -28,6 +28,7 @@ DIGESTS = {
     "random-goals": "6ee1eb7b9d25d6a03f13",
     "demo-only": "bd8bd4300b2b00051a76",
     "random": "927f42c8fcb6b0f806de",
+    "sgim-acts": "ff626c0e2d7334134e16",
 }
 
 
@@ -65,6 +66,15 @@ def runner_records(learner: str, seed: int = SEED, movements: int = MOVEMENTS,
     from sgim_nodes.core.runner import build_world, run
 
     world = build_world("fishing", seed)
+    if learner == "sgim-acts":  # its teachers answer requests (core/acts_runner.py)
+        from sgim_nodes.core.acts_runner import experts_for, run_acts
+
+        experts = experts_for("fishing", world, seed)
+        made = make_learner(learner, world.env.action_dim, world.env.outcome_dim, seed,
+                            scale=world.scale, teachers=tuple(experts))
+        records = []
+        run_acts(made, world, movements, eval_every, experts, records.append)
+        return records
     made = make_learner(learner, world.env.action_dim, world.env.outcome_dim, seed,
                         scale=world.scale)
     records: list[dict] = []

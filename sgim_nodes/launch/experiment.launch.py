@@ -46,7 +46,13 @@ def node_arguments(arguments: Mapping[str, str]) -> list[tuple[str, dict[str, An
     """(node name, keyword arguments of launch_ros.actions.Node) of every node of the run,
     from the graph description; ParameterError (one line per problem) before anything
     starts."""
-    from sgim_nodes.graph.description import MAX_RESPAWNS, RunOptions, graph, parameters
+    from sgim_nodes.graph.description import (
+        MAX_RESPAWNS,
+        RunOptions,
+        acts_teachers,
+        graph,
+        parameters,
+    )
     from sgim_nodes.graph.overrides import parse_assignments, read_parameter_files
     from sgim_ros.params import ParameterError
 
@@ -80,10 +86,13 @@ def node_arguments(arguments: Mapping[str, str]) -> list[tuple[str, dict[str, An
                                               / "web_teacher.url"))
     values = parameters(options, per_node, {**where, **assigned_where})
     return [(spec.name, {"package": spec.package, "executable": spec.executable,
-                         "name": spec.name, "parameters": [values.for_node(spec)],
+                         "name": spec.executable, "parameters": [values.for_node(spec)],
+                         **({"namespace": spec.namespace} if spec.namespace else {}),
                          "output": "screen", "respawn": spec.respawn,
                          "respawn_max_retries": MAX_RESPAWNS if spec.respawn else -1})
-            for spec in graph(learner, options.teacher, markers) if not spec.interactive]
+            for spec in graph(learner, options.teacher, markers,
+                              acts_teachers(values.shared))
+            if not spec.interactive]
 
 
 def generate_launch_description():

@@ -21,9 +21,9 @@ Interfaces (absolute names: every expert shares the run's record topics):
   subscribes  /help_requests (HelpRequest: those whose `teacher` is its name), /run_status
   publishes   /demonstrations (Demonstration: source "expert:NAME", help_request = the ask's
               index, movement_index = the ask's, teaching_set_index the world's row or -1)
-A request published before the expert's subscription matched is lost (the records' QoS is
-volatile): whoever asks waits for the match first, as the tests do; the arbiter's start-up
-handshake with the experts comes with its SGIM-ACTS loop.
+  serves      expert_ready (RecorderReady, in its namespace): a request published before the
+              expert's subscription matched would be lost (the records' QoS is volatile), so
+              the arbiter asks it before the run's first movement (sgim_ros/ready.py)
 Parameters: name, part, precision, radius_size, seed, noise, teaching_set, action_size,
 outcome_size, outcome_noise, movements.
 """
@@ -45,6 +45,7 @@ from sgim_nodes.core.teaching import GOAL_ONLY, MEANS_AND_GOAL, MEANS_ONLY
 from sgim_nodes.nodes.ros_glue import COMMON_PARAMS, floats, run_node, vec, world_scale
 from sgim_ros import qos
 from sgim_ros.params import Param, ParameterError, declare, non_negative
+from sgim_ros.ready import serve_ready
 from sim_bridge.data_params import TEACHING_SET_FILE
 from sim_bridge.fishing_world import DEFAULT_NOISE, FishingWorld
 from sim_bridge.lake import Lake
@@ -114,7 +115,11 @@ class ExpertNode(Node):
             p["action_size"], p["outcome_size"], budget=p["movements"],
             teaching_set_size=len(ts.actions)))
         self._out = self.create_publisher(Demonstration, "/demonstrations", qos.RECORDS)
-        self.create_subscription(HelpRequest, "/help_requests", self._on_request, qos.RECORDS)
+        requests = self.create_subscription(HelpRequest, "/help_requests", self._on_request,
+                                            qos.RECORDS)
+        # A request missed before the DDS match would leave the learner waiting: the arbiter
+        # asks <namespace>/expert_ready before its first movement (sgim_ros/ready.py).
+        serve_ready(self, "expert_ready", {"help_requests": requests})
         self.create_subscription(RunStatus, "/run_status", self._on_status, qos.RECORDS)
         radius = ("no radius" if math.isinf(self.expert.radius)
                   else f"radius {self.expert.radius:g}")

@@ -176,3 +176,14 @@ def test_only_the_learners_own_code_is_in_its_learner_code_field():
     assert fp.learner_of({"arbiter": {"learner": "sgim-d"}, "simulator": {}}) == "sgim-d"
     with pytest.raises(ValueError, match="several learners"):
         fp.learner_of({"a": {"learner": "sgim-d"}, "b": {"learner": "random"}})
+
+
+def test_a_parameter_only_another_learner_reads_is_left_out():
+    """SGIM-ACTS's `teachers` is declared by nodes every learner runs, and read by its own
+    runs only: it shapes the fingerprint of those alone."""
+    def shaping(learner: str) -> dict:
+        values = {"goal_generator": {"learner": learner, "teachers": "a,b", "zeta": 50}}
+        return fp.graph_parameters(values, {"goal_generator": ["learner", "teachers", "zeta"]})
+
+    assert shaping("sgim-d") == {"goal_generator": {"learner": "sgim-d", "zeta": 50}}
+    assert shaping("sgim-acts")["goal_generator"]["teachers"] == "a,b"

@@ -377,6 +377,52 @@ def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner)
         assert run.teacher_checks == []
 
 
+def test_sgim_acts_through_the_graph(ros_processes, ros_domain, tmp_path):
+    """Issue 33: SGIM-ACTS's graph (its three experts in their namespaces) is the runner's
+    learner: the same movements, the same requests to the same teachers, the same answers and
+    the same competence per (strategy, goal)."""
+    from sgim_msgs.msg import Goal
+
+    child = run_graph(ros_processes, ros_domain, tmp_path, "sgim-acts")
+    later = runner_records_later("sgim-acts")
+    run = finish(child, tmp_path, "sgim-acts")
+    records = later.result()
+    assert bag_digest(run.movements) == runner_digest(records) == DIGESTS["sgim-acts"]
+    evaluations = [r["mean_distance"] for r in records if r["type"] == "evaluation"]
+    assert [e.mean_distance for e in run.evaluations] == pytest.approx(evaluations, abs=1e-12)
+
+    # Every request: when, to whom, for what, about which goal (1-based in the graph).
+    requests = [r for r in records if r["type"] == "request"]
+    assert len(requests) == len(run.help_requests) > 5
+    for ask, want in zip(run.help_requests, requests, strict=True):
+        assert ask.index == want["request"] + 1 and ask.movement_index == want["movement"]
+        assert f"{'mimicry' if ask.content == 'means-and-goal' else 'emulation'}:" \
+               f"{ask.teacher}" == want["strategy"]
+        assert np.array_equal(ask.goal, want["goal"])
+    # Every answer: from the expert asked, its world row, or "none there" (empty).
+    answers = {r["request"] + 1: r for r in records if r["type"] == "answer"}
+    replies = [d for d in run.demonstrations if d.help_request]
+    assert sorted(d.help_request for d in replies) == sorted(answers)
+    for reply in replies:
+        want = answers[reply.help_request]
+        assert reply.source == f"expert:{want['teacher']}"
+        shown = len(reply.action) or len(reply.outcome)
+        assert bool(shown) == (want["answered"] and (want["action"] is not None
+                                                    or want["outcome"] is not None))
+        if shown:
+            assert reply.teaching_set_index == want["teaching_index"]
+    # Each ended episode's competence, at its chosen goal, in its strategy's history.
+    ended = [r for r in records if r["type"] == "strategy_choice" and r["competence"] is not None]
+    assert [c.strategy for c in run.competences] == [r["strategy"] for r in ended]
+    assert [c.competence for c in run.competences] == pytest.approx(
+        [r["competence"] for r in ended], abs=1e-12)
+    for comp, want in zip(run.competences, ended, strict=True):
+        assert np.array_equal(comp.goal, want["goal"])
+    assert {g.strategy for g in run.goals} >= {"autonomous"}
+    assert all(g.mode != Goal.MODE_DEMONSTRATION for g in run.goals)
+    assert run.teacher_checks == []
+
+
 def test_a_demonstration_mid_goal_is_handled_at_the_next_movement_boundary(
         ros_processes, ros_domain, tmp_path, rclpy_context):
     from rclpy.duration import Duration

@@ -28,7 +28,7 @@ movement, and ``choices`` logs every choice for analysis.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -98,6 +98,24 @@ class ChoiceLog:
 
 
 @dataclass
+class NearestOutcome:
+    """The outcome nearest ``point`` over an episode's successful movements (the first of
+    equally near ones): every strategy is measured at the goal the learner chose, whatever
+    its movements aimed at. The graph's nodes measure with it too."""
+
+    point: np.ndarray
+    distance: float = float("inf")
+    outcome: np.ndarray | None = None
+
+    def observe(self, result: ResultLike) -> None:
+        if is_success(result):
+            outcome = np.asarray(result.outcome, dtype=float)
+            d = portable.norm(outcome - self.point)
+            if d < self.distance:
+                self.distance, self.outcome = d, outcome.copy()
+
+
+@dataclass
 class Episode:
     """One chosen (strategy, goal) and the process carrying it out; tracks the outcome
     nearest the chosen goal over the episode's successful movements."""
@@ -106,19 +124,17 @@ class Episode:
     start_distance: float
     log: ChoiceLog
     process: GoalAttempt | Imitation | None = None
-    best_distance: float = float("inf")
-    best_outcome: np.ndarray | None = field(default=None)
+    nearest: NearestOutcome | None = None
+
+    def __post_init__(self) -> None:
+        self.nearest = NearestOutcome(self.choice.goal)
 
     @property
     def done(self) -> bool:
         return self.process is None or self.process.done
 
     def observe(self, action: np.ndarray, result: ResultLike) -> None:
-        if is_success(result):
-            outcome = np.asarray(result.outcome, dtype=float)
-            d = portable.norm(outcome - self.choice.goal)
-            if d < self.best_distance:
-                self.best_distance, self.best_outcome = d, outcome.copy()
+        self.nearest.observe(result)
         self.process.observe(action, result)
 
 
@@ -248,7 +264,7 @@ class SgimActsLearner(Learner):
         d = self.config.distances(self.scale)
         reference = (episode.start_distance if self.config.competence_reference == "memory"
                      else d.competence_radius)
-        comp = competence(episode.choice.goal, episode.best_outcome, reference,
+        comp = competence(episode.choice.goal, episode.nearest.outcome, reference,
                           d.success_tolerance, d.competence_floor)
         episode.log.competence = comp
         self.regions.add(episode.choice.strategy.name, episode.choice.goal, comp)

@@ -14,7 +14,7 @@ refused with one line each, naming them.
 from __future__ import annotations
 
 import importlib
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from functools import cache
 from pathlib import Path
@@ -23,11 +23,14 @@ from typing import Any
 import yaml
 
 from sgim_nodes.core.config import LearnerConfig
-from sgim_nodes.core.learners import GOAL_BABBLERS, LEARNER_NAMES
+from sgim_nodes.core.learners import CORE_LEARNER_NAMES, GOAL_BABBLERS
 from sgim_ros.params import Param, ParameterError
 
 LEARNER_CONFIG = Path(__file__).resolve().parents[2] / "config" / "learner.yaml"
 SOCIAL = ("sgim-d", "demo-only")
+ACTS = "sgim-acts"  # nodes/ros_glue.ACTS
+LEARNER_NAMES = CORE_LEARNER_NAMES
+"""The learners the graph runs: every one the core builds."""
 TEACHERS = ("automatic", "human", "web", "external")
 # The arbiter only knows synchronous (automatic) and asynchronous (human) demonstrations.
 ARBITER_TEACHER = {"automatic": "automatic", "human": "human", "web": "human",
@@ -39,7 +42,8 @@ MAX_RESPAWNS = 3
 
 @dataclass(frozen=True)
 class NodeSpec:
-    """One node of the graph: `ros2 run PACKAGE EXECUTABLE`, named EXECUTABLE."""
+    """One node of the graph: `ros2 run PACKAGE EXECUTABLE`, named EXECUTABLE, in the
+    run's namespace or, given `namespace`, in that one (SGIM-ACTS's teachers: /centre/expert)."""
 
     package: str
     executable: str
@@ -51,10 +55,16 @@ class NodeSpec:
     respawn: bool = False
     # The human teacher's prompt needs the terminal; leaving it (`quit`) does not end the run.
     interactive: bool = False
+    namespace: str = ""
 
     @property
     def name(self) -> str:
-        return self.executable
+        return f"{self.namespace}/{self.executable}" if self.namespace else self.executable
+
+    def in_namespace(self, namespace: str) -> NodeSpec:
+        from dataclasses import replace
+
+        return replace(self, namespace=namespace)
 
     @property
     def params(self) -> tuple[Param, ...]:
@@ -78,8 +88,7 @@ NODES = {spec.name: spec for spec in (
     NodeSpec("teacher", "teacher", "teacher.teacher_node"),
     NodeSpec("teacher", "human_input", "teacher.human_input_node", interactive=True),
     NodeSpec("teacher", "web_teacher", "teacher.web_teacher_node"),
-    # SGIM-ACTS's teachers (issue 33): one per name, each in its namespace; no learner's
-    # graph starts them yet (the arbiter's requests to them come next).
+    # SGIM-ACTS's teachers (issue 33): one per name, each in the namespace of its name.
     NodeSpec("teacher", "expert", "teacher.expert_node"),
     NodeSpec("sgim_nodes", "social_interaction", "sgim_nodes.nodes.social_interaction"),
 )}
@@ -147,11 +156,25 @@ OPTION_PARAMETERS = {"learner": "the learner argument", "seed": "--seed",
 SECRETS = ("token",)  # never written into metadata.yaml
 
 
-def graph(learner: str, teacher: str = "automatic", markers: bool = True) -> list[NodeSpec]:
-    """The nodes a run of `learner` needs, the recorder first and the arbiter last."""
+def acts_teachers(overrides: Mapping[str, Any]) -> list[str]:
+    """SGIM-ACTS's teachers in a run: its `teachers` parameter, or the default ones."""
+    from sgim_nodes.nodes.ros_glue import TEACHERS, teacher_names
+
+    return teacher_names(overrides.get("teachers", TEACHERS.default))
+
+
+def graph(learner: str, teacher: str = "automatic", markers: bool = True,
+          teachers: Sequence[str] | None = None) -> list[NodeSpec]:
+    """The nodes a run of `learner` needs, the recorder first and the arbiter last; for
+    sgim-acts, an expert per name of `teachers` (None: the default ones)."""
     names = ["recorder", "sim_bridge", "evaluator"] + (["markers"] if markers else [])
-    if learner in GOAL_BABBLERS:
+    if learner in GOAL_BABBLERS or learner == ACTS:
         names += ["interest_computer", "goal_generator", "low_level_explorer"]
+    if learner == ACTS:
+        experts = [NODES["expert"].in_namespace(name)
+                   for name in (acts_teachers({}) if teachers is None else teachers)]
+        return [*(NODES[name] for name in names), NODES["imitation"], *experts,
+                NODES[ARBITER]]
     if learner in SOCIAL:
         names.append("imitation")
         teacher_node = {"automatic": "teacher", "human": "human_input",
@@ -171,7 +194,8 @@ MOVEMENT_LISTENERS = ("recorder", "evaluator", "markers", "low_level_explorer", 
 def movement_listeners(options: RunOptions) -> list[str]:
     """The nodes of this run's graph that the simulator waits for (sim_bridge's
     `movement_listeners`) before it serves a movement, at its start and after a restart."""
-    return [spec.name for spec in graph(options.learner, options.teacher, options.markers)
+    return [spec.name for spec in graph(options.learner, options.teacher, options.markers,
+                                        acts_teachers(options.overrides))
             if spec.name in MOVEMENT_LISTENERS]
 
 
@@ -257,15 +281,15 @@ class RunParameters:
     def to_yaml(self) -> dict[str, Any]:
         """The ROS parameter file of the run."""
         return {"/**": {"ros__parameters": dict(self.shared)},
-                **{name: {"ros__parameters": dict(values)}
+                **{f"/{name}" if "/" in name else name: {"ros__parameters": dict(values)}
                    for name, values in self.per_node.items() if values}}
 
     @classmethod
     def from_yaml(cls, data: Any) -> RunParameters:
         """Read back a file written by to_yaml (KeyError or TypeError if it is not one)."""
         shared = dict(data["/**"]["ros__parameters"])
-        return cls(shared, {name: dict(body["ros__parameters"]) for name, body in data.items()
-                            if name != "/**"})
+        return cls(shared, {name.lstrip("/"): dict(body["ros__parameters"])
+                            for name, body in data.items() if name != "/**"})
 
 
 def fingerprint(values: RunParameters, nodes: Iterable[NodeSpec]):
@@ -338,8 +362,8 @@ def parameters(options: RunOptions, node_overrides: Mapping[str, Mapping[str, An
         problems.append(str(error))
     per_node: dict[str, dict[str, Any]] = {}
     for name, own in node_overrides.items():
-        spec = NODES.get(name)
-        if spec is None:
+        spec = NODES.get(name if "/" not in name else name.rsplit("/", 1)[-1])
+        if spec is None or ("/" in name and spec.name != "expert"):
             problems.append(f"unknown node '{name}'{(where or {}).get(name, '')}: the nodes "
                             f"are {', '.join(NODES)}")
             continue

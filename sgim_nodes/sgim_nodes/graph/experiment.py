@@ -45,6 +45,7 @@ from sgim_nodes.graph.description import (
     NodeSpec,
     RunOptions,
     RunParameters,
+    acts_teachers,
     check,
     fingerprint,
     graph,
@@ -120,7 +121,7 @@ class Plan:
         # The run's secret its simulator signs movements with (sgim_ros/record_key.py): made
         # with the folder, kept in it for resume and the readers ("" for a run made before).
         self.record_key = record_key.read_key(run_dir)
-        self.nodes = graph(learner, teacher, markers)
+        self.nodes = graph(learner, teacher, markers, acts_teachers(values.shared))
         self.address_file = (Path(values.shared["address_file"])
                              if values.shared.get("address_file") else None)
 
@@ -142,7 +143,8 @@ def plan_new(args: argparse.Namespace) -> Plan:
                          web_address_file=str(run_dir / "web_teacher.url"),
                          web_linger=args.web_linger)
     values = parameters(options, files_per_node, {**where, **assigned_where})
-    nodes = graph(args.learner, args.teacher, not args.no_markers)
+    nodes = graph(args.learner, args.teacher, not args.no_markers,
+                  acts_teachers(values.shared))
     for name in unused({**files_shared, **assigned}, nodes):
         say(f"note: parameter '{name}' is not used by a {args.learner} run "
             f"(teacher {args.teacher})")
@@ -230,7 +232,8 @@ def plan_resume(args: argparse.Namespace) -> Plan | None:
             entry["redone"] = redone
         entry.update(_fingerprint_then_and_now(run_dir, meta, values,
                                                graph(learner, teacher,
-                                                     bool(meta.get("markers", True)))))
+                                                     bool(meta.get("markers", True)),
+                                                     acts_teachers(values.shared))))
         if state.lost:
             entry["lost_movements"] = list(state.lost)
         meta.setdefault("resumed", []).append(entry)
@@ -377,7 +380,8 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
 
     def start(spec: NodeSpec, log_name: str) -> subprocess.Popen:
         argv = [*node_prefix.get(spec.name, []), str(ROS2RUN), spec.package, spec.executable,
-                "--ros-args", "--params-file", str(plan.params_file)]
+                "--ros-args", "--params-file", str(plan.params_file),
+                *(["-r", f"__ns:=/{spec.namespace}"] if spec.namespace else [])]
         if spec.interactive:  # the prompt needs this terminal
             return group.start(log_name, argv, new_session=False, stdout=None, stderr=None)
         return group.start(log_name, argv)

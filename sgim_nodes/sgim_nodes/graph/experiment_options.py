@@ -12,7 +12,7 @@ import secrets
 from collections.abc import Sequence
 from pathlib import Path
 
-from sgim_nodes.core.learners import LEARNER_NAMES
+from sgim_nodes.core.learners import CORE_LEARNER_NAMES as LEARNER_NAMES
 from sgim_nodes.graph.description import STORAGES, TEACHERS
 from sgim_nodes.graph.run_folder import run_name_problem
 from sgim_ros.command_line import shown

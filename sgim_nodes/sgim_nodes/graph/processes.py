@@ -41,8 +41,9 @@ class ProcessGroup:
         """Start argv (in a new session unless told otherwise: a terminal program stays in the
         terminal's); its output goes to log_dir/name.log when log_dir is set."""
         if self.log_dir is not None and "stdout" not in popen_kwargs:
-            self.log_dir.mkdir(parents=True, exist_ok=True)
-            log = open(self.log_dir / f"{name}.log", "wb")  # noqa: SIM115 - owned by the child
+            path = self.log_dir / f"{name}.log"  # a namespaced node's in a folder of its own
+            path.parent.mkdir(parents=True, exist_ok=True)
+            log = open(path, "wb")  # noqa: SIM115 - owned by the child
             popen_kwargs.setdefault("stdout", log)
             popen_kwargs.setdefault("stderr", subprocess.STDOUT)
         if self._lifeline is None:

@@ -80,11 +80,13 @@ def _description(p: Any) -> str:
 
 def who_runs(spec: NodeSpec) -> str:
     """Which learners' graphs hold the node, with the teacher or markers it needs."""
-    from sgim_nodes.core.learners import LEARNER_NAMES
-    from sgim_nodes.graph.description import TEACHERS
+    from sgim_nodes.graph.description import LEARNER_NAMES, TEACHERS
+
+    def holds(nodes: list[NodeSpec]) -> bool:  # in any namespace (SGIM-ACTS's experts)
+        return any((s.package, s.executable) == (spec.package, spec.executable) for s in nodes)
 
     runs = {(learner, teacher, markers) for learner in LEARNER_NAMES for teacher in TEACHERS
-            for markers in (True, False) if spec in graph(learner, teacher, markers)}
+            for markers in (True, False) if holds(graph(learner, teacher, markers))}
     learners = [name for name in LEARNER_NAMES if any(r[0] == name for r in runs)]
     teachers = sorted({r[1] for r in runs}, key=TEACHERS.index)
     if not runs:

@@ -21,7 +21,7 @@ from typing import Any
 
 import yaml
 
-from sgim_nodes.core.learners import LEARNER_NAMES
+from sgim_nodes.core.learners import CORE_LEARNER_NAMES as LEARNER_NAMES
 from sgim_ros.command_line import YamlProblem, parse_yaml
 from sgim_ros.params import SEED_MAX, seed_problem
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from sgim_nodes.core.help_request import DEFAULT_TIMING, TIMINGS
 from sgim_nodes.nodes.pace import FOREVER
-from sgim_nodes.nodes.ros_glue import learner_node_params
+from sgim_nodes.nodes.ros_glue import TEACHERS, learner_node_params
 from sgim_nodes.nodes.sim_client import SIM_CLIENT_PARAMS
 from sgim_ros.params import Param, at_least, non_negative, one_of, positive
 from sim_bridge.data_params import TEACHING_SET_FILE
@@ -43,6 +43,7 @@ PARAMS = learner_node_params(
           "is the job's only one)", at_least(1)),
     Param("evaluation_timeout", 600.0, "seconds to wait for the final evaluation", positive,
           read_only=False),
+    TEACHERS,
     *SIM_CLIENT_PARAMS,
     Param("settle_time", 2.0, "seconds of discovery settling before the start", non_negative),
     Param("teaching_set", "", "the teacher's teaching-set file (empty: the packaged one), to "

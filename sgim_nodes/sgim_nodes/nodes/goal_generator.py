@@ -17,6 +17,11 @@ Parameters: the common ones, the region-tree ones and p_mode1..3, mode3_radius_n
 LearnerConfig, map_timeout. The random-goals learner draws every goal uniformly (mode 2). A
 request that names a `demonstrated` outcome (a goal-only demonstration, issue 14) adopts it as
 the goal (MODE_DEMONSTRATION), drawing nothing, as the single-process learner adopts it.
+
+SGIM-ACTS (issue 33) draws a (strategy, goal) pair instead (core/strategy_choice.py, random
+stream "strategies"), over autonomous and the mimicry and emulation of each of `teachers`: its
+Goal names the strategy, and each Competence, which names it too, goes into that strategy's
+history of its region (core/strategy_regions.py).
 """
 
 from __future__ import annotations
@@ -33,25 +38,45 @@ from sgim_nodes.core.learners import goal_mode_probabilities, region_tree_for
 from sgim_nodes.core.live_regions import LiveRegions
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.nodes.ros_glue import (
+    ACTS,
+    TEACHERS,
     AsyncNode,
     check_vector,
     declare_learner,
     floats,
     learner_node_params,
     run_node,
+    teacher_names,
     vec,
     world_scale,
 )
 from sgim_ros import qos
 from sgim_ros.entry import first_of
-from sgim_ros.params import Param, positive
+from sgim_ros.params import Param, ParameterError, positive
 from sgim_ros.ready import serve_ready
 
 MODE_CODES = {1: Goal.MODE_INTEREST_REGION, 2: Goal.MODE_UNIFORM, 3: Goal.MODE_LEAST_COMPETENT}
 PARAMS = learner_node_params(
     Param("map_timeout", 60.0, "seconds to wait until the region tree holds the requested "
           "number of attempted goals", positive),
+    TEACHERS,
 )
+
+
+def acts_choice(config, scale, teachers: str):
+    """SGIM-ACTS's (strategy, region) histories and its chooser, over ``teachers``."""
+    from sgim_nodes.core.strategies import all_strategies
+    from sgim_nodes.core.strategy_choice import StrategyChooser
+    from sgim_nodes.core.strategy_regions import StrategyRegions
+
+    try:
+        strategies = all_strategies(teacher_names(teachers), config)
+    except ValueError as error:
+        raise ParameterError(f"parameter 'teachers': {error}") from error
+    regions = StrategyRegions(region_tree_for(config, scale), [s.name for s in strategies])
+    return regions, StrategyChooser(regions, strategies,
+                                    (config.p_mode1, config.p_mode2, config.p_mode3),
+                                    config.distances(scale).mode3_radius)
 
 
 class GoalGenerator(AsyncNode):
@@ -60,9 +85,16 @@ class GoalGenerator(AsyncNode):
         values, c = declare_learner(self, PARAMS)
         self.timeout = values["map_timeout"]
         self.outcome_size = values["outcome_size"]
-        self.rng = component_rng(values["seed"], "goals")
+        self.acts = values["learner"] == ACTS
+        self.rng = component_rng(values["seed"], "strategies" if self.acts else "goals")
         self.goal_count = 0
         tree, folded = region_tree_for(c, world_scale(values)), 0
+        if self.acts:
+            if values["resume_from"]:
+                raise ParameterError("sgim-acts cannot resume a run yet: its strategies' "
+                                     "histories are not rebuilt from a bag")
+            self.strategy_regions, self.chooser = acts_choice(c, world_scale(values),
+                                                              values["teachers"])
         if values["resume_from"]:
             point = resume_point(values["resume_from"], c, values["resume_segments"])
             self.goal_count = point.goal_index
@@ -84,6 +116,11 @@ class GoalGenerator(AsyncNode):
         if self.gate.check("competences", msg):  # the readers' checks: logged, not folded
             return
         self.regions.add(vec(msg.goal), float(msg.competence))
+        if self.acts:
+            try:
+                self.strategy_regions.add(msg.strategy, vec(msg.goal), float(msg.competence))
+            except ValueError as error:  # a strategy this learner does not have
+                self.get_logger().error(f"competence of goal {msg.goal_index}: {error}")
         for needed, future in self._waiters:
             if self.regions.goal_count >= needed and not future.done():
                 future.set_result(True)
@@ -108,13 +145,17 @@ class GoalGenerator(AsyncNode):
                 response.ok, response.message = False, why
                 return response
             point, mode = vec(request.demonstrated), Goal.MODE_DEMONSTRATION
+            strategy = ""
+        elif self.acts:
+            pair = self.chooser.sample(self.rng)
+            point, mode, strategy = pair.goal, MODE_CODES[pair.mode], pair.strategy.name
         else:
             choice = self.selector.sample(self.rng)
-            point, mode = choice.goal, MODE_CODES[choice.mode]
+            point, mode, strategy = choice.goal, MODE_CODES[choice.mode], ""
         self.goal_count += 1
         goal = Goal(stamp=self.get_clock().now().to_msg(), index=self.goal_count,
                     movement_index=request.movement_index, point=floats(point),
-                    region_id=self.regions.region_id(point), mode=mode)
+                    region_id=self.regions.region_id(point), mode=mode, strategy=strategy)
         self._goals.publish(goal)
         response.ok, response.goal = True, goal
         return response

@@ -10,6 +10,7 @@ matched every publisher the arbiter sees. Each failure names the node to look at
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from rclpy.node import Node
@@ -18,6 +19,7 @@ from rclpy.task import Future
 from sgim_msgs.srv import RecorderReady
 from sgim_nodes.bag.types import RECORDED_TOPICS
 from sgim_nodes.core.learners import GOAL_BABBLERS
+from sgim_nodes.nodes.ros_glue import ACTS
 from sgim_ros.entry import first_of
 
 POLL_SECONDS = 0.1
@@ -39,32 +41,37 @@ class ExpectedGraph:
 
 def arbiter_graph(learner: str, social: bool, automatic: bool, wait_for_recorder: bool,
                   wait_for_evaluation: bool, *, execute, reach, register,
-                  imitate) -> ExpectedGraph:
+                  imitate, teachers: Sequence[str] = ()) -> ExpectedGraph:
     """What the arbiter of a `learner` run needs: the servers of its clients (`execute`,
     `reach`, `register`, `imitate`) that this learner calls, the evaluator and the automatic
     teacher heard, and every node that listens to the run's records hearing it from its
-    first record (sgim_ros/ready.py)."""
+    first record (sgim_ros/ready.py); for sgim-acts, the expert of each of its `teachers`
+    listening to its requests."""
+    acts = learner == ACTS
     expected = ExpectedGraph(servers=[(execute, "execute_action")])
-    if learner in GOAL_BABBLERS:
+    if learner in GOAL_BABBLERS or acts:
         expected.servers.append((reach, "reach_goal"))
-        if social:
+        if social or acts:
             expected.servers.append((register, "register_demonstration"))
-    if social:
+    if social or acts:
         expected.servers.append((imitate, "imitate"))
     # The teacher's checks too: the recorder must have matched their publisher before the
     # first turn, at movement 0 (sgim_ros/ready.py asks only about publishers seen).
     expected.publishers = [topic for needed, topic in ((wait_for_evaluation, "evaluations"),
                                                        (automatic, "demonstrations"),
-                                                       (automatic, "teacher_checks"))
+                                                       (automatic, "teacher_checks"),
+                                                       (bool(teachers), "demonstrations"))
                            if needed]
     wanted = [
         (wait_for_recorder, "recorder_ready",
          "the recorder node (or set wait_for_recorder to false)"),
         (wait_for_evaluation, "evaluator_ready", "the evaluator node"),
-        (learner in GOAL_BABBLERS, "explorer_ready", "the low_level_explorer node"),
-        (learner in GOAL_BABBLERS, "goal_generator_ready", "the goal_generator node"),
-        (social, "imitation_ready", "the imitation node"),
+        (learner in GOAL_BABBLERS or acts, "explorer_ready", "the low_level_explorer node"),
+        (learner in GOAL_BABBLERS or acts, "goal_generator_ready", "the goal_generator node"),
+        (social or acts, "imitation_ready", "the imitation node"),
         (automatic, "teacher_ready", "the teacher node"),
+        *((True, f"/{name}/expert_ready", f"the expert node of teacher {name} (ros2 run "
+           f"teacher expert --ros-args -r __ns:=/{name})") for name in teachers),
     ]
     expected.listeners = [(service, who) for needed, service, who in wanted if needed]
     return expected

@@ -4,7 +4,9 @@ Each `imitate` job is one core Imitation (a_demo + a_rand, |a_rand| < imitation_
 driven movement by movement through the simulator's `execute_action` service, recorded as
 imitation movements aimed at the demonstrated outcome. A means-only demonstration (issue 14)
 comes without its outcome: its imitation aims at no goal (the movements' goal is empty) and
-has no best outcome, as the core's. A cancel is honoured at the next movement boundary.
+has no best outcome, as the core's. SGIM-ACTS's mimicry gives `measure_at`, the goal it
+chose: the best outcome is then the one nearest that goal (core/acts_learner.NearestOutcome),
+whatever the demonstration showed. A cancel is honoured at the next movement boundary.
 
 Interfaces:
   subscribes  movements      (sgim_msgs/Movement; validated: the run's count, to refuse a job
@@ -66,7 +68,9 @@ class ImitationNode(AsyncNode):
         result = Imitate.Result(best_distance=float("inf"))
         why = (check_vector(request.action, self.action_size, "demonstrated action", 1.0)
                or (check_vector(request.outcome, self.outcome_size, "demonstrated outcome")
-                   if len(request.outcome) else ""))
+                   if len(request.outcome) else "")
+               or (check_vector(request.measure_at, self.outcome_size, "goal to measure at",
+                                1.0) if len(request.measure_at) else ""))
         count = self.gate.movements.count
         if not why and request.movements_before < count:
             why = (f"the job starts after movement {request.movements_before}, but the run is "
@@ -79,6 +83,11 @@ class ImitationNode(AsyncNode):
         goal = vec(request.outcome) if len(request.outcome) else None  # None: means-only
         job = Imitation(vec(request.action), goal, count,
                         self.config.imitation_epsilon, self.rng)
+        measured = None
+        if len(request.measure_at):
+            from sgim_nodes.core.acts_learner import NearestOutcome
+
+            measured = NearestOutcome(vec(request.measure_at))
         while not job.done:
             if handle.is_cancel_requested:
                 result.cancelled = True
@@ -89,11 +98,15 @@ class ImitationNode(AsyncNode):
                 movement_index=request.movements_before + job.movements + 1,
                 goal=list(request.outcome), record=True))
             outcome = vec(response.outcome) if len(response.outcome) else None
-            job.observe(action, MovementResult(outcome, response.status))
+            moved = MovementResult(outcome, response.status)
+            if measured is not None:
+                measured.observe(moved)
+            job.observe(action, moved)
             handle.publish_feedback(Imitate.Feedback(movements_done=job.movements))
         result.movements_used = job.movements
-        result.best_outcome = floats(job.best_outcome)
-        result.best_distance = job.best_distance
+        best = job if measured is None else None
+        result.best_outcome = floats(job.best_outcome if best else measured.outcome)
+        result.best_distance = job.best_distance if best else measured.distance
         return result
 
 

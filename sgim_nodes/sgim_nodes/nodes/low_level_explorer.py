@@ -19,6 +19,13 @@ movement boundary: the movement under way always completes, and no goal is chose
 cancel. The result counts the job's movements and attempted goals, and describes its last goal
 (whether it ended by itself or was cut).
 
+SGIM-ACTS (issue 33): each Goal names a strategy. An autonomous one is attempted as above; a
+social one ends the job before any movement, handing the goal and the memory's distance to it
+back to the arbiter (`social`), which asks the teacher. An emulation comes back as a job of
+one goal: the teacher's outcome to reach (`demonstrated`) and the chosen goal (`chosen`).
+Every SGIM-ACTS episode's competence is measured at the goal the learner chose, against the
+memory's distance to it when chosen (core/acts_learner.NearestOutcome), and names the strategy.
+
 Interfaces:
   subscribes  movements              (sgim_msgs/Movement)
   publishes   competences            (sgim_msgs/Competence)
@@ -43,6 +50,7 @@ from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.nodes.graph_startup import call_bounded
 from sgim_nodes.nodes.movement_memory import MovementMemory
 from sgim_nodes.nodes.ros_glue import (
+    ACTS,
     PROCESS_CODES,
     AsyncNode,
     JobServer,
@@ -77,6 +85,7 @@ class LowLevelExplorer(AsyncNode):
         values, self.config = declare_learner(self, PARAMS)
         self.action_size, self.outcome_size = values["action_size"], values["outcome_size"]
         self.rng = component_rng(values["seed"], "explorer")
+        self.acts = values["learner"] == ACTS
         self.scale = world_scale(values)
         self.distances = self.config.distances(self.scale)
         self.probe_scale = probe_scale_for(self.config, self.scale, self.action_size)
@@ -119,12 +128,25 @@ class LowLevelExplorer(AsyncNode):
         try:
             self._check(request)
             await self.memory.reached(request.movements_before)
-            while not (handle.is_cancel_requested
+            if len(request.chosen.point):  # SGIM-ACTS's emulation: the teacher's outcome
+                await self._reach(handle, request, result, request.chosen, False,
+                                  aim=vec(request.demonstrated),
+                                  start=request.chosen_start_distance)
+            while not (len(request.chosen.point) or handle.is_cancel_requested
                        or result.movements_used >= request.max_movements
                        or (request.max_goals and result.goals_attempted >= request.max_goals)):
                 demonstrated = list(request.demonstrated) if not result.goals_attempted else []
                 goal = await self._choose(request, result, demonstrated)
-                await self._reach(handle, request, result, goal, bool(demonstrated))
+                start = None
+                if self.acts:
+                    point = vec(goal.point)
+                    start = start_distance(self.memory.memory.closest_distance(point), point,
+                                           self.scale.centre)
+                    if goal.strategy != "autonomous":  # the arbiter asks the teacher
+                        result.social, result.social_start_distance = goal, start
+                        break
+                await self._reach(handle, request, result, goal, bool(demonstrated),
+                                  start=start)
                 if demonstrated or not result.goal_movements:
                     break  # a demonstrated goal is the job's only one; a goal cut at once ends it
         except JobRefused as error:
@@ -141,6 +163,11 @@ class LowLevelExplorer(AsyncNode):
         elif len(request.demonstrated):
             why = check_vector(request.demonstrated, self.outcome_size, "demonstrated goal",
                                bound=1.0)
+        if not why and len(request.chosen.point):
+            why = (check_vector(request.chosen.point, self.outcome_size, "chosen goal", 1.0)
+                   or ("" if len(request.demonstrated) else
+                       "a chosen goal (an emulation) needs the teacher's outcome to reach, "
+                       "in demonstrated"))
         if not why and request.movements_before < self.memory.count:
             why = (f"the job starts after movement {request.movements_before}, but the run is "
                    f"at movement {self.memory.count}: not this run's arbiter")
@@ -162,12 +189,19 @@ class LowLevelExplorer(AsyncNode):
         return reply.goal
 
     async def _reach(self, handle, request: ReachGoal.Goal, result: ReachGoal.Result, chosen,
-                     demonstrated: bool) -> None:
-        """Attempt one goal up to the job's cap or a cancel; its competence published and the
-        result updated (the job's counts, and this goal as its last)."""
-        goal = vec(chosen.point)
+                     demonstrated: bool, aim=None, start: float | None = None) -> None:
+        """Attempt one goal (``aim``, by default the chosen one) up to the job's cap or a
+        cancel; its competence published and the result updated (the job's counts, and this
+        goal as its last). ``start`` given (SGIM-ACTS): the competence is measured at the
+        chosen goal against this distance, over every movement of the attempt."""
+        goal = vec(chosen.point) if aim is None else aim
         attempt = GoalAttempt(goal, self.memory.memory, self.memory.inverse_model, self.config,
                               self.scale, self.rng, self.action_size, self.probe_scale)
+        measured = None
+        if start is not None:
+            from sgim_nodes.core.acts_learner import NearestOutcome
+
+            measured = NearestOutcome(vec(chosen.point))
         used = 0
         while not (attempt.done or handle.is_cancel_requested
                    or result.movements_used + used >= request.max_movements):
@@ -179,17 +213,23 @@ class LowLevelExplorer(AsyncNode):
             used += 1
             await self.memory.reached(index)
             outcome = vec(response.outcome) if len(response.outcome) else None
-            attempt.observe(action, MovementResult(outcome, response.status))
+            moved = MovementResult(outcome, response.status)
+            if measured is not None:
+                measured.observe(moved)
+            attempt.observe(action, moved)
+        if measured is not None:  # SGIM-ACTS: at the chosen goal
+            goal, best = measured.point, measured.outcome
+        else:
+            goal, best, start = goal, attempt.best_outcome, attempt.start_distance
         result.movements_used += used
         result.goal, result.goal_index = floats(goal), chosen.index
         result.goal_movements, result.finished = used, attempt.done
-        result.reached = floats(attempt.best_outcome)
+        result.reached = floats(best)
         result.competence = -1.0
-        if attempt.best_outcome is not None:
-            reference = (attempt.start_distance
-                         if self.config.competence_reference == "memory"
+        if best is not None:
+            reference = (start if self.config.competence_reference == "memory"
                          else self.distances.competence_radius)
-            result.competence = competence(goal, attempt.best_outcome, reference,
+            result.competence = competence(goal, best, reference,
                                            self.distances.success_tolerance,
                                            self.distances.competence_floor)
         if used > 0:  # an attempted goal, even an interrupted one, counts for the interest
@@ -200,7 +240,7 @@ class LowLevelExplorer(AsyncNode):
                 movement_index=request.movements_before + result.movements_used,
                 goal=result.goal, reached=result.reached,
                 competence=result.competence, movements_used=used,
-                from_demonstration=demonstrated))
+                from_demonstration=demonstrated, strategy=chosen.strategy))
 
 
 def main(args: list[str] | None = None) -> int:

@@ -17,7 +17,7 @@ from sgim_msgs.msg import Region, RegionMap
 from sgim_nodes.bag.record_checks import vector_problem
 from sgim_nodes.core.config import INVERSE_MODELS, OPTIMISERS, STEP_CHECKS, LearnerConfig
 from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS  # noqa: F401 - for nodes
-from sgim_nodes.core.learners import LEARNER_NAMES
+from sgim_nodes.core.learners import CORE_LEARNER_NAMES
 from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
 from sgim_nodes.core.region_tree import SPLIT_QUALITIES
 from sgim_nodes.core.scale import WorldScale, unit_box
@@ -35,6 +35,7 @@ from sgim_ros.params import (
 from sim_bridge.scaling import OUTCOME_NOISE
 
 ACTION_SIZE = 24  # the fishing world's; a parameter of every node that checks sizes
+ACTS = "sgim-acts"  # core/acts_learner.ACTS, named here so a node imports its module when needed
 OUTCOME_SIZE = 2
 JOB_RESULT_SECONDS = 1
 """How long a job server keeps a finished job's result (rclpy's default is 900 s). Every job's
@@ -103,7 +104,7 @@ def check_vector(values: Sequence[float], size: int, what: str, bound: float = 1
 
 
 COMMON_PARAMS = (
-    Param("learner", "sgim-d", "which learner the graph runs", one_of(*LEARNER_NAMES)),
+    Param("learner", "sgim-d", "which learner the graph runs", one_of(*CORE_LEARNER_NAMES)),
     Param("seed", 0, "seed of the run; each node derives its own random stream from it",
           seed_range),
     Param("action_size", ACTION_SIZE, "numbers per action (the world's action size)",
@@ -158,6 +159,24 @@ def learner_params() -> tuple[Param, ...]:
 def world_scale(values: dict[str, Any]) -> WorldScale:
     """The fishing world's outcome box [-1, 1]^outcome_size and its outcome noise."""
     return unit_box(values["outcome_size"], values["outcome_noise"])
+
+
+def teacher_names(text: str) -> list[str]:
+    """The teachers of a `teachers` parameter: comma-separated names, blanks ignored."""
+    return [name.strip() for name in str(text).split(",") if name.strip()]
+
+
+def _teachers_ok(text: str) -> bool:
+    from sgim_nodes.core.strategies import TEACHER_NAME
+
+    names = teacher_names(text)
+    return len(set(names)) == len(names) and all(TEACHER_NAME.fullmatch(n) for n in names)
+
+
+TEACHERS = Param("teachers", "centre,west,rough", "sgim-acts: the teachers it may ask, "
+                 "comma-separated; each is an expert node in the namespace of its name (ros2 "
+                 "run teacher expert --ros-args -r __ns:=/NAME)", _teachers_ok,
+                 "distinct names, each a letter then letters, digits or '_'")
 
 
 def learner_node_params(*extra: Param) -> tuple[Param, ...]:

@@ -9,7 +9,9 @@ according to the learner:
              with the competence of the best imitation;
   saggriac   goal babbling only;
   demo-only  variations of the latest demonstration (random movements before the first);
-  random     random movements.
+  random     random movements;
+  sgim-acts  goal babbling whose goals each come with a strategy: an autonomous one is
+             attempted by the explorer, a social one asks its teacher (acts_episodes.py).
 A demonstration preempts the intrinsic loop at the next movement boundary: with the automatic
 teacher (`teacher: automatic`) the arbiter knows the teacher's period and stops every job at
 the teacher's boundaries, then waits for its word (a demonstration, or an empty one when it has
@@ -63,6 +65,7 @@ from sgim_nodes.core.help_request import ON_REQUEST
 from sgim_nodes.core.learners import GOAL_BABBLERS
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.core.teaching import GOAL_ONLY, MEANS_ONLY
+from sgim_nodes.nodes.acts_episodes import ActsEpisodes, emulation_job
 from sgim_nodes.nodes.arbiter_jobs import JobSlot, Waits
 from sgim_nodes.nodes.arbiter_params import PARAMS, SOCIAL
 from sgim_nodes.nodes.demonstration_inbox import DemonstrationInbox, shown
@@ -76,10 +79,12 @@ from sgim_nodes.nodes.graph_startup import (
 from sgim_nodes.nodes.help_asks import HelpAsks
 from sgim_nodes.nodes.pace import PaceControl
 from sgim_nodes.nodes.ros_glue import (
+    ACTS,
     AsyncNode,
     declare_learner,
     floats,
     run_node,
+    teacher_names,
     vec,
     world_scale,
 )
@@ -95,6 +100,10 @@ class SocialInteraction(AsyncNode):
         values, self.config = declare_learner(self, PARAMS)
         self.p = values
         self.learner = values["learner"]
+        self.acts = self.learner == ACTS
+        if self.acts and values["resume_from"]:
+            raise ParameterError("sgim-acts cannot resume a run yet: its strategies' "
+                                 "histories are not rebuilt from a bag")
         self.total = values["movements"]
         social = self.learner in SOCIAL and values["teacher"] != "none"
         self.automatic = social and values["teacher"] == "automatic"
@@ -130,6 +139,7 @@ class SocialInteraction(AsyncNode):
         if social and values["teacher"] == "human":
             self.pace = PaceControl(self, self.total, values["demonstration_period"],
                                     values["wait_for_teacher"], self._preempt_goal)
+        self.episodes = ActsEpisodes(self) if self.acts else None
         self.sim = SimClient(self, values)
         self.register_client = self.create_client(RegisterDemonstration,
                                                   "register_demonstration")
@@ -167,6 +177,13 @@ class SocialInteraction(AsyncNode):
 
     # --- events -------------------------------------------------------------------------
     def _on_demo(self, msg: Demonstration) -> None:
+        if self.acts:  # a teacher's answer to one of its requests
+            problem = self.gate.check("demonstrations", msg)
+            why = problem.detail if problem is not None else self.episodes.receive(msg)
+            if why:
+                self._say_refusal(f"demonstration {msg.index} refused: {why}")
+            self._wake()
+            return
         if not self.social:
             return
         if self.inbox.receive(msg, self.count):
@@ -222,9 +239,10 @@ class SocialInteraction(AsyncNode):
         return arbiter_graph(self.learner, self.social, self.automatic,
                              self.p["wait_for_recorder"], self.p["wait_for_evaluation"],
                              execute=self.sim.client, reach=self.reach,
-                             register=self.register_client, imitate=self.imitate)
+                             register=self.register_client, imitate=self.imitate,
+                             teachers=teacher_names(self.p["teachers"]) if self.acts else ())
 
-    async def _call(self, client, request, name: str):
+    async def call(self, client, request, name: str):
         """A service call that gives up after call_timeout (RunAborted naming the service)."""
         return await call_bounded(self, client, request, name, self.p["call_timeout"])
 
@@ -255,10 +273,16 @@ class SocialInteraction(AsyncNode):
                 self._paced()
                 continue
             cap = self._cap()
-            if self.learner in GOAL_BABBLERS:
+            if self.acts:
+                result = await self._goal_attempt(cap)
+                if result.movements_used:
+                    self.episodes.in_a_row = 0
+                if len(result.social.point):
+                    await self.episodes.run(result.social, result.social_start_distance)
+            elif self.learner in GOAL_BABBLERS:
                 await self._goal_attempt(cap)
             elif self.learner == "demo-only" and self.latest_demo is not None:
-                await self._imitation(self.latest_demo, cap)
+                await self.imitation(self.latest_demo, cap)
             else:
                 await self._random_movement()
             self._paced()
@@ -305,26 +329,26 @@ class SocialInteraction(AsyncNode):
                              "demonstration shows none", always=True)
                 return
             self.latest_demo = demo
-            self._publish_taken(demo)
+            self.publish_taken(demo)
             return
         if demo.content == GOAL_ONLY:  # emulation: the outcome becomes the next goal
-            self._publish_taken(demo)
+            self.publish_taken(demo)
             await self._goal_attempt(self._cap(), demonstrated=demo.outcome)
             return
         if demo.content == MEANS_ONLY:  # the action, imitated; where it lands, seen by itself
-            self._publish_taken(demo)
-            await self._imitation(demo, min(self.config.imitation_count,
+            self.publish_taken(demo)
+            await self.imitation(demo, min(self.config.imitation_count,
                                             self.total - self.count))
             return
-        reply = await self._call(self.register_client,
+        reply = await self.call(self.register_client,
                                  RegisterDemonstration.Request(demonstration=demo),
                                  "register_demonstration")
         if not reply.accepted:
             self.inbox.refuse(demo, f"the explorer refused it: {reply.message}")
             return
-        self._publish_taken(demo)
+        self.publish_taken(demo)
         # The imitation never runs past the budget (the single-process runner stops there).
-        result = await self._imitation(demo, min(self.config.imitation_count,
+        result = await self.imitation(demo, min(self.config.imitation_count,
                                                  self.total - self.count))
         if result is not None and result.movements_used > 0:
             goal = vec(demo.outcome)
@@ -336,14 +360,13 @@ class SocialInteraction(AsyncNode):
                 comp = competence(goal, vec(result.best_outcome), reference,
                                   self.distances.success_tolerance,
                                   self.distances.competence_floor)
-            self._competences.publish(Competence(
+            self.publish_competence(Competence(
                 stamp=self.get_clock().now().to_msg(), goal_index=0,
                 movement_index=self.count, goal=floats(goal), reached=result.best_outcome,
                 competence=comp, movements_used=result.movements_used,
                 from_demonstration=True))
-            self.goals_folded += 1
 
-    async def _goal_attempt(self, cap: int, demonstrated=()) -> None:
+    async def _goal_attempt(self, cap: int, demonstrated=()) -> ReachGoal.Result:
         """Goals drawn by the goal generator and reached by the explorer, up to `cap`
         movements and goals_per_job goals; or the `demonstrated` outcome adopted, alone."""
         result = await self._action(self.reach, ReachGoal.Goal(
@@ -353,11 +376,25 @@ class SocialInteraction(AsyncNode):
         if self.asks is not None:  # one goal per job: its attempt is the job's last
             self.asks.attempt_ended(vec(result.goal), result.goal_movements,
                                     result.competence, result.finished, self.count)
+        return result
 
-    async def _imitation(self, demo: Demonstration, repetitions: int) -> Imitate.Result:
+    async def emulate(self, goal, start: float, outcome) -> None:
+        """SGIM-ACTS's emulation: the explorer reaches the teacher's outcome, and measures
+        the episode at the chosen goal."""
+        result = await self._action(self.reach, emulation_job(
+            goal, start, outcome, self._cap(), self.count, self.goals_folded), "reach_goal")
+        self.goals_folded += result.goals_attempted
+
+    def publish_competence(self, msg: Competence) -> None:
+        """A competence folded by the arbiter (an imitated demonstration, a social episode)."""
+        self._competences.publish(msg)
+        self.goals_folded += 1
+
+    async def imitation(self, demo: Demonstration, repetitions: int,
+                        measure_at=()) -> Imitate.Result:
         return await self._action(self.imitate, Imitate.Goal(
             action=demo.action, outcome=demo.outcome, repetitions=repetitions,
-            movements_before=self.count), "imitate")
+            movements_before=self.count, measure_at=list(measure_at)), "imitate")
 
     async def _action(self, client: ActionClient, goal, name: str):
         held = self.inbox.pending or (self.pace is not None and self.pace.paused)
@@ -378,7 +415,7 @@ class SocialInteraction(AsyncNode):
             process=Movement.PROCESS_RANDOM, movement_index=index, record=True))
         self.count = index
 
-    def _publish_taken(self, demo: Demonstration) -> None:
+    def publish_taken(self, demo: Demonstration) -> None:
         """The learner's memory holds it from now on (after movement `count`)."""
         self._taken.publish(Demonstration(
             stamp=self.get_clock().now().to_msg(), index=demo.index, movement_index=self.count,

@@ -57,6 +57,9 @@ OPERATIONAL = frozenset({"startup_timeout", "settle_time", "map_timeout", "execu
 learner does: a slow machine may need a longer startup_timeout for the very same runs."""
 SILENT_NODES = frozenset({"recorder", "markers"})
 """Nodes that only record or draw: their parameters cannot change a movement."""
+OWN_PARAMETERS = {"teachers": "sgim-acts"}
+"""Parameters only one learner's nodes read (the nodes of every learner declare them): a run
+of another learner leaves them out, as they cannot change its movements."""
 
 
 def _digest(parts: Iterable[bytes], length: int = 16) -> str:
@@ -237,13 +240,15 @@ def graph_parameters(node_parameters: Mapping[str, Mapping[str, Any]],
                      read_only: Mapping[str, Iterable[str]]) -> dict[str, dict[str, Any]]:
     """The parameters of a graph run that shape its movements: of every node but the silent
     ones, those it declares read-only (the ones it may change while it runs are timeouts),
-    less the per-run (PER_RUN) and operational (OPERATIONAL) ones. ``read_only``: node -> its
-    read-only parameter names."""
+    less the per-run (PER_RUN) and operational (OPERATIONAL) ones and those of another learner
+    (OWN_PARAMETERS). ``read_only``: node -> its read-only parameter names."""
     out = {}
+    learner = learner_of(node_parameters)
+    others = {name for name, owner in OWN_PARAMETERS.items() if owner != learner}
     for node, values in node_parameters.items():
         if node in SILENT_NODES:
             continue
-        keep = set(read_only.get(node, ())) - PER_RUN - OPERATIONAL
+        keep = set(read_only.get(node, ())) - PER_RUN - OPERATIONAL - others
         out[node] = {k: v for k, v in values.items() if k in keep}
     return out
 

@@ -36,7 +36,7 @@ from typing import Any
 
 import yaml
 
-from sgim_nodes.core.learners import LEARNER_NAMES
+from sgim_nodes.core.learners import CORE_LEARNER_NAMES as LEARNER_NAMES
 from sgim_nodes.graph import experiment_options
 from sgim_nodes.graph.description import (
     ARBITER_TEACHER,
@@ -44,6 +44,7 @@ from sgim_nodes.graph.description import (
     SOCIAL,
     STORAGES,
     RunOptions,
+    acts_teachers,
     check,
     fingerprint,
     graph,
@@ -153,7 +154,8 @@ def _fingerprint_of(learner: str, movements: int, eval_every: int, period: int, 
                     storage: str, params: tuple[tuple[str, str], ...]) -> Fingerprint:
     options = RunOptions(learner, 0, movements, eval_every, period, teacher, "", storage,
                          checked_params(params))
-    return fingerprint(parameters(options), graph(learner, teacher))
+    return fingerprint(parameters(options), graph(learner, teacher,
+                                                  teachers=acts_teachers(options.overrides)))
 
 
 def checked_params(params: Iterable[tuple[str, str]]) -> dict[str, Any]:
