@@ -138,9 +138,9 @@ OWN_MODULES_SCRIPT = """
 import sys
 from sgim_nodes.core.runner import main
 from sgim_nodes.provenance.fingerprint import LEARNER_MODULES
-learner, output = sys.argv[1], sys.argv[2]
+learner, output, extra = sys.argv[1], sys.argv[2], sys.argv[3:]
 code = main(["--env", "planar-arm", "--learner", learner, "--movements", "40",
-             "--eval-every", "20", "--seed", "3", "--quiet", "--output", output])
+             "--eval-every", "20", "--seed", "3", "--quiet", "--output", output, *extra])
 loaded = {m.rsplit(".", 1)[-1] for m in sys.modules if m.startswith("sgim_nodes.core.")}
 for owner, names in LEARNER_MODULES.items():
     print(owner, sorted(loaded & set(names)))
@@ -148,21 +148,27 @@ sys.exit(code)
 """
 
 
-@pytest.mark.parametrize("learner", ["sgim-d", "demo-only", "sgim-acts"])
-def test_a_learners_own_modules_are_imported_by_its_runs_only(learner, tmp_path):
-    """The claim that lets work on SGIM-ACTS leave the other learners' pages fresh: a run of
-    another learner never imports LEARNER_MODULES, so those modules cannot change it."""
+@pytest.mark.parametrize("learner, extra, group", [
+    ("sgim-d", [], ()), ("demo-only", [], ()), ("sgim-acts", [], ("sgim-acts",)),
+    ("sgim-d", ["--teacher-turns", "west,east,rough"], ("sgim-acts",))])
+def test_the_optional_modules_are_imported_by_the_runs_that_count_them(learner, extra, group,
+                                                                      tmp_path):
+    """The claim that lets work on SGIM-ACTS leave the other learners' pages fresh: a run
+    imports the modules of LEARNER_MODULES' groups that module_groups gives it, and no other,
+    so the others cannot change it."""
     import subprocess
     import sys
 
     done = subprocess.run([sys.executable, "-c", OWN_MODULES_SCRIPT, learner,
-                           str(tmp_path / "run.jsonl")], capture_output=True, text=True,
-                          timeout=300)
+                           str(tmp_path / "run.jsonl"), *extra], capture_output=True,
+                          text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     loaded = dict(line.split(" ", 1) for line in done.stdout.splitlines() if line)
+    options = {"teacher_turns": extra[1]} if extra else {}
+    assert fp.module_groups(fp.runner_parameters("planar-arm", learner, {}, options)) == group
     for owner, names in fp.LEARNER_MODULES.items():
-        expected = sorted(names) if owner == learner else []
-        assert loaded[owner] == str(expected), (owner, loaded[owner])
+        imported = set(eval(loaded[owner]))
+        assert imported <= set(names) and bool(imported) == (owner in group), imported
 
 
 def test_only_the_learners_own_code_is_in_its_learner_code_field():

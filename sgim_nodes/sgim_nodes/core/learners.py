@@ -19,7 +19,7 @@ Successful movements are stored in memory; failed ones count as movements but ar
 - "random":    uniform random actions; demonstrations are ignored.
 - "sgim-acts": chooses for each episode a goal region and a strategy (autonomous, mimicry or
                emulation of one of its teachers), asking the teachers itself
-               (acts_learner.py; core only, not yet in the node graph).
+               (acts_learner.py).
 """
 
 from __future__ import annotations
@@ -45,10 +45,10 @@ from .teaching import OWN_PROCESSES
 RANDOM = "random"
 DEMONSTRATION = "demonstration"
 LEARNER_NAMES = ("sgim-d", "saggriac", "random-goals", "demo-only", "random")
-"""The learners the node graph runs too (its launcher, parameters and bags enumerate these)."""
+"""The paper's learners and its yardsticks (the studies compare these)."""
 CORE_LEARNER_NAMES = (*LEARNER_NAMES, "sgim-acts")
-"""Every learner make_learner builds: sgim-acts (acts_learner.py) runs in the core only until
-its nodes exist, so it stays out of LEARNER_NAMES."""
+"""Every learner make_learner builds and the node graph runs: LEARNER_NAMES and SGIM-ACTS
+(acts_learner.py), which asks teachers of its own (experts.py)."""
 GOAL_BABBLERS = ("sgim-d", "saggriac", "random-goals")
 UNIFORM_GOALS = (0.0, 1.0, 0.0)  # random-goals: mode 2 only
 

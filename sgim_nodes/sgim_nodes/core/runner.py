@@ -162,7 +162,7 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
         teacher_rule: str = DEFAULT_REACHED_RULE,
         teacher_choice: str = DEFAULT_TEACHER_CHOICE,
         demonstration_content: str = DEFAULT_DEMONSTRATION_CONTENT,
-        timing: str = DEFAULT_TIMING) -> list[float]:
+        timing: str = DEFAULT_TIMING, teacher_turns: Sequence[Any] = ()) -> list[float]:
     """Drive ``learner`` for ``movements`` movements; returns the evaluation means.
 
     Evaluations happen at 0, every ``eval_every`` movements and at the end.  Social learners
@@ -170,7 +170,8 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
     teaching goal is unreached under ``teacher_rule``, the one ``teacher_choice`` picks, showing
     what ``demonstration_content`` says (core/teaching.py). With ``timing`` "on-request" the
     teacher speaks only when the learner asks (core/help_request.py), at most as many times as
-    the periodic teacher's turns.
+    the periodic teacher's turns. ``teacher_turns`` (ExpertSpec values): several teachers
+    take the periodic teacher's turns (core/teacher_turns.py).
     """
     check_rule(teacher_rule)
     check_choice(teacher_choice)
@@ -182,11 +183,22 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
     if learner.name == "demo-only" and demonstration_content == GOAL_ONLY:
         raise ValueError("demo-only varies demonstrated actions: it needs them shown "
                          "(demonstration_content means-and-goal or means-only)")
+    if teacher_turns and timing == ON_REQUEST:
+        raise ValueError("teachers taking turns speak at their boundaries: timing on-request "
+                         "has one teacher")
     teacher, teacher_env = None, None
     if learner.social and world.teaching_actions is not None:
-        teacher = Teacher(world.teaching_actions, world.teaching_outcomes,
-                          component_rng(seed, "teacher"), teacher_period,
-                          teacher_tolerance_noise * world.scale.noise, teacher_choice)
+        tolerance = teacher_tolerance_noise * world.scale.noise
+        if teacher_turns:
+            from .teacher_turns import TeacherTurns
+
+            teacher = TeacherTurns(teacher_turns, world.teaching_actions,
+                                   world.teaching_outcomes, seed, teacher_period, tolerance,
+                                   teacher_choice, world.make_teacher_env, world.part_of)
+        else:
+            teacher = Teacher(world.teaching_actions, world.teaching_outcomes,
+                              component_rng(seed, "teacher"), teacher_period, tolerance,
+                              teacher_choice)
         if teacher_rule == ABILITY:
             if world.make_teacher_env is None:
                 raise ValueError("the teacher's 'ability' rule needs world.make_teacher_env")
@@ -245,6 +257,7 @@ def _run(learner: Learner, world: World, movements: int, eval_every: int,
             learner.on_demonstration(action, outcome)
             write({"type": "demonstration", "movement": i, "teaching_index": demo.index,
                    "content": content, "action": _vec(action), "outcome": _vec(outcome),
+                   **({"teacher": demo.teacher} if getattr(demo, "teacher", "") else {}),
                    **({} if asked is None else {"asked_goal": _vec(asked)})})
         action, label = learner.next_action()
         result = world.env.execute(action)
@@ -308,6 +321,11 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                         "paper), or when the learner asks, its competence progress stalled "
                         "(core/help_request.py; as many asks at most as periodic turns; "
                         "default: %(default)s)")
+    p.add_argument("--teacher-turns", default="",
+                   help="several teachers take the teacher's turns, in this order: "
+                        "comma-separated names of the world's SGIM-ACTS experts, e.g. "
+                        "centre,west,rough on fishing (core/teacher_turns.py; default: one "
+                        "teacher who knows the whole teaching set)")
     p.add_argument("--teacher-tolerance-noise", type=float, default=DEFAULT_TOLERANCE_NOISE,
                    help="a teaching goal is reached within this many units of the world's "
                         "outcome noise (default: %(default)s)")
@@ -329,6 +347,9 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     if args.learner == "demo-only" and args.timing == ON_REQUEST:
         p.error("demo-only attempts no goals, so it never asks: --timing on-request needs "
                 "sgim-d")
+    if args.teacher_turns and args.timing == ON_REQUEST:
+        p.error("--teacher-turns speak at their boundaries: --timing on-request has one "
+                "teacher")
     if args.learner == "demo-only" and args.demonstration_content == GOAL_ONLY:
         p.error("demo-only varies demonstrated actions: --demonstration-content goal-only "
                 "shows none")
@@ -352,6 +373,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         return main_acts(args, world, config)
     learner = make_learner(args.learner, world.env.action_dim, world.env.outcome_dim,
                            args.seed, config, world.scale)
+    turns_specs: tuple = ()
+    if args.teacher_turns:
+        from .teacher_turns import turn_specs
+
+        try:
+            turns_specs = turn_specs(args.env, args.teacher_turns)
+        except ValueError as error:
+            print(f"error: --teacher-turns: {error}", file=sys.stderr)
+            return 2
     args.output.parent.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
     with args.output.open("w") as f, tqdm(total=args.movements, disable=args.quiet,
@@ -375,12 +405,15 @@ def main(argv: Sequence[str] | None = None) -> int:
                "teacher": {"period": args.teacher_period, "rule": args.teacher_rule,
                            "choice": args.teacher_choice,
                            "content": args.demonstration_content, "timing": args.timing,
-                           "tolerance_noise": args.teacher_tolerance_noise},
+                           "tolerance_noise": args.teacher_tolerance_noise,
+                           **({"turns": [s.name for s in turns_specs]} if turns_specs
+                              else {})},
                "config": config.to_dict()})
         means = run(learner, world, args.movements, args.eval_every, args.seed, write,
                     args.teacher_period, args.teacher_tolerance_noise, progress=bar.update,
                     teacher_rule=args.teacher_rule, teacher_choice=args.teacher_choice,
-                    demonstration_content=args.demonstration_content, timing=args.timing)
+                    demonstration_content=args.demonstration_content, timing=args.timing,
+                    teacher_turns=turns_specs)
         demos = counts["demonstration"]  # goal- or means-only ones are not in memory
         turns = ((counts["help_request"] if args.timing == ON_REQUEST else
                   budget_for(args.movements, args.teacher_period))

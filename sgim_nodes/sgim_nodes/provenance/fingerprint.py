@@ -5,9 +5,10 @@ must never be pooled or reused as if they were alike. The fingerprint holds, eac
 of its own so that a difference can be named:
 
 - ``code``: the learner's core (sgim_nodes/core/*.py) that every learner runs through;
-- ``learner_code``: the core modules that only the run's learner runs through
-  (LEARNER_MODULES: SGIM-ACTS's strategies, teachers and loop), empty for the others, so that
-  work on one learner does not make the pages of the others stale;
+- ``learner_code``: the core modules that only some runs go through (LEARNER_MODULES:
+  SGIM-ACTS's strategies, teachers and loop, for its runs and for SGIM-D's with teachers
+  taking turns), empty for the others, so that work on SGIM-ACTS does not make the pages of
+  the others stale;
 - ``world``: the fishing world's modules (sim_bridge: the cast, the lake, the scaling, the
   data loaders);
 - ``data``: the world's data files (map, benchmark goals, teaching set, floor), by content;
@@ -38,9 +39,10 @@ from typing import Any
 ENVIRONMENT_FIELDS = ("code", "world", "data", "numpy", "scipy", "pybullet", "python")
 FIELDS = (*ENVIRONMENT_FIELDS, "learner_code", "parameters")
 LEARNER_MODULES = {"sgim-acts": ("acts_learner", "acts_runner", "experts", "strategies",
-                                 "strategy_choice", "strategy_regions")}
+                                 "strategy_choice", "strategy_regions", "teacher_turns")}
 """Core modules only one learner imports (tests/provenance/test_fingerprint.py checks that a
-run of any other learner does not): they count in that learner's ``learner_code`` only."""
+run of any other learner does not, unless its teachers take turns): they count in the
+``learner_code`` of those runs only (module_groups)."""
 LIBRARIES = ("numpy", "scipy", "pybullet")
 WORLD_MODULES = ("bezier", "data_files", "fishing_world", "lake", "rod_urdf", "scaling")
 """The sim_bridge modules a cast runs through (not its node, renderer or tools)."""
@@ -57,9 +59,11 @@ OPERATIONAL = frozenset({"startup_timeout", "settle_time", "map_timeout", "execu
 learner does: a slow machine may need a longer startup_timeout for the very same runs."""
 SILENT_NODES = frozenset({"recorder", "markers"})
 """Nodes that only record or draw: their parameters cannot change a movement."""
-OWN_PARAMETERS = {"teachers": "sgim-acts"}
-"""Parameters only one learner's nodes read (the nodes of every learner declare them): a run
-of another learner leaves them out, as they cannot change its movements."""
+OWN_PARAMETERS = {"teachers": lambda value, learner: learner == "sgim-acts",
+                  "teacher_turns": lambda value, learner: bool(value)}
+"""Parameters that nodes of every learner declare but only some runs read: SGIM-ACTS's
+teachers, and teachers taking turns when there are some. A run that does not read one leaves
+it out, as it cannot change its movements."""
 
 
 def _digest(parts: Iterable[bytes], length: int = 16) -> str:
@@ -115,10 +119,24 @@ def shared_core_files() -> list[Path]:
     return [f for f in core_files() if f.stem not in _own_modules()]
 
 
+def module_groups(parameters: Mapping[str, Any]) -> tuple[str, ...]:
+    """The groups of LEARNER_MODULES a run with these parameters goes through."""
+    turns = _found(parameters, "teacher_turns")
+    return ("sgim-acts",) if learner_of(parameters) == "sgim-acts" or turns else ()
+
+
+def _found(parameters: Mapping[str, Any], name: str) -> Any:
+    """A parameter at the top (a runner's run) or of any node (a graph's), else None."""
+    if parameters.get(name):
+        return parameters[name]
+    return next((v[name] for v in parameters.values() if isinstance(v, Mapping)
+                 and v.get(name)), None)
+
+
 @cache
-def learner_code(learner: str | None) -> str:
-    """The digest of the core modules only this learner runs through ("" when none)."""
-    names = LEARNER_MODULES.get(learner or "", ())
+def learner_code(groups: tuple[str, ...]) -> str:
+    """The digest of the core modules of these groups ("" when none)."""
+    names = {n for group in groups for n in LEARNER_MODULES[group]}
     return source_digest([f for f in core_files() if f.stem in names]) if names else ""
 
 
@@ -232,7 +250,7 @@ def learner_of(parameters: Mapping[str, Any]) -> str | None:
 def fingerprint(parameters: Mapping[str, Any]) -> Fingerprint:
     """The fingerprint of a run of this checkout with these shaping parameters."""
     params = json.loads(canonical(parameters))
-    return Fingerprint({**environment(), "learner_code": learner_code(learner_of(params)),
+    return Fingerprint({**environment(), "learner_code": learner_code(module_groups(params)),
                         "parameters": _digest([canonical(params).encode()])}, params)
 
 
@@ -244,11 +262,12 @@ def graph_parameters(node_parameters: Mapping[str, Mapping[str, Any]],
     (OWN_PARAMETERS). ``read_only``: node -> its read-only parameter names."""
     out = {}
     learner = learner_of(node_parameters)
-    others = {name for name, owner in OWN_PARAMETERS.items() if owner != learner}
     for node, values in node_parameters.items():
         if node in SILENT_NODES:
             continue
-        keep = set(read_only.get(node, ())) - PER_RUN - OPERATIONAL - others
+        unread = {name for name, read in OWN_PARAMETERS.items()
+                  if name in values and not read(values[name], learner)}
+        keep = set(read_only.get(node, ())) - PER_RUN - OPERATIONAL - unread
         out[node] = {k: v for k, v in values.items() if k in keep}
     return out
 
