@@ -21,6 +21,10 @@ and only a pair shown whole enters the mirrored memory, as the learner's. "Reach
                  landed within the tolerance of it.
 Its random stream "teacher" and its world's stream make its choices those of the
 single-process runner for the same seed.
+With `teacher_turns` (issue 33's comparison, core/teacher_turns.py) several teachers take the
+turns, in the order named: each knows its part of the teaching set and shows it with its own
+precision (SGIM-ACTS's experts: centre, west, rough); a rough teacher's cast that lands on no
+water shows the action alone (means-only).
 Every turn's judgement is recorded (issue 31): before the turn's demonstration it publishes one
 TeacherCheck per teaching goal on `teacher_checks` (the goal, the action the learner's model
 gave, where its world landed it or the learner's own outcome nearest it, the distance, the
@@ -32,7 +36,7 @@ Interfaces:
   publishes   teacher_checks (sgim_msgs/TeacherCheck), demonstrations (sgim_msgs/Demonstration)
 Parameters: the common ones, the memory and inverse-model fields of LearnerConfig,
 demonstration_period, reached_rule, teacher_choice, demonstration_content, timing,
-tolerance_noise, noise (of the teacher's own world), teaching_set, movements.
+tolerance_noise, noise (of the teacher's own world), teaching_set, movements, teacher_turns.
 """
 
 from __future__ import annotations
@@ -56,6 +60,7 @@ from sgim_nodes.core.teaching import (
     DEFAULT_TEACHER_CHOICE,
     DEFAULT_TOLERANCE_NOISE,
     DEMONSTRATION_CONTENTS,
+    MEANS_ONLY,
     OWN_PROCESSES,
     PAPER_PERIOD,
     REACHED_RULES,
@@ -77,7 +82,7 @@ from sgim_nodes.nodes.ros_glue import (
     world_scale,
 )
 from sgim_ros import qos
-from sgim_ros.params import Param, at_least, non_negative, one_of
+from sgim_ros.params import Param, ParameterError, at_least, non_negative, one_of
 from sgim_ros.ready import serve_ready
 from sim_bridge.data_params import TEACHING_SET_FILE
 from sim_bridge.fishing_world import DEFAULT_NOISE, FishingWorld
@@ -110,7 +115,25 @@ PARAMS = learner_node_params(
           TEACHING_SET_FILE),
     Param("movements", 0, "the run's movement budget, to validate run statuses (0: unknown)",
           non_negative),
+    Param("teacher_turns", "", "several teachers take the turns, in this order: "
+          "comma-separated names of SGIM-ACTS's experts (centre, west, rough); empty: one "
+          "teacher who knows the whole teaching set (core/teacher_turns.py)"),
 )
+
+
+def teacher_turns(p: dict, ts, tolerance: float):
+    """The teachers of `teacher_turns`, each casting in its own copy of the teacher's world."""
+    from sgim_nodes.core.teacher_turns import TeacherTurns, turn_specs
+    from sim_bridge.lake import Lake
+
+    try:
+        specs = turn_specs("fishing", p["teacher_turns"])
+        return TeacherTurns(specs, ts.actions, ts.outcomes, p["seed"],
+                            p["demonstration_period"], tolerance, p["teacher_choice"],
+                            lambda: FishingWorld(seed=world_seed(p["seed"], "teacher-world"),
+                                                 noise=p["noise"]), Lake().part_of_outcome)
+    except ValueError as error:
+        raise ParameterError(f"parameter 'teacher_turns': {error}") from error
 
 
 class TeacherNode(Node):
@@ -118,10 +141,15 @@ class TeacherNode(Node):
         super().__init__("teacher")
         p, config = declare_learner(self, PARAMS)
         ts = load_checked(p["teaching_set"], p["action_size"], p["outcome_size"])
-        self.teacher = Teacher(ts.actions, ts.outcomes, component_rng(p["seed"], "teacher"),
-                               p["demonstration_period"],
-                               p["tolerance_noise"] * p["outcome_noise"],
-                               p["teacher_choice"])
+        tolerance = p["tolerance_noise"] * p["outcome_noise"]
+        if p["teacher_turns"]:
+            if p["timing"] == ON_REQUEST:
+                raise ParameterError("teacher_turns: teachers taking turns speak at their "
+                                     "boundaries, so timing must be 'period'")
+            self.teacher = teacher_turns(p, ts, tolerance)
+        else:
+            self.teacher = Teacher(ts.actions, ts.outcomes, component_rng(p["seed"], "teacher"),
+                                   p["demonstration_period"], tolerance, p["teacher_choice"])
         self.rule = p["reached_rule"]
         self.choice = p["teacher_choice"]
         self.content = p["demonstration_content"]
@@ -149,6 +177,8 @@ class TeacherNode(Node):
             point = resume_point(p["resume_from"], config, p["resume_segments"])
             self.memory.resume(point)
             self.answered = set(point.demonstration_turns)
+            if p["teacher_turns"]:
+                self.teacher.turn = len(self.answered)
             self.answered_requests = set(point.help_requests_answered)
             self.given = point.demonstrations_given
         # The arbiter waits for a publisher of both and for the recorder to match them
@@ -279,12 +309,15 @@ class TeacherNode(Node):
             msg.index, msg.teaching_set_index = self.given, demo.index
             msg.action = [] if action is None else floats(action)
             msg.outcome = [] if outcome is None else floats(outcome)
+            if action is not None and outcome is None and self.content != MEANS_ONLY:
+                msg.content = MEANS_ONLY  # a rough teacher's cast that landed nowhere
             if action is not None and outcome is not None:
                 # The learner stores it right after movement k, as the single-process runner.
                 self.memory.add_demonstration_after(k, action, outcome)
-            self.get_logger().info(f"demonstration {self.given} at movement {k}: entry "
-                                   f"{demo.index}, outcome {np.round(demo.outcome, 3)}, "
-                                   f"showing {self.content}")
+            by = f" by {demo.teacher}" if getattr(demo, "teacher", "") else ""
+            landed = "none" if demo.outcome is None else np.round(demo.outcome, 3)
+            self.get_logger().info(f"demonstration {self.given} at movement {k}{by}: entry "
+                                   f"{demo.index}, outcome {landed}, showing {msg.content}")
         else:
             self.get_logger().info(f"nothing left to demonstrate at movement {k}")
         self._out.publish(msg)

@@ -55,14 +55,14 @@ def finish(child, tmp_path, learner, timeout=330):
 # world, must still match the runner (runner_records_later: beside the graph run).
 
 
-def assert_the_teachers_checks(run, records) -> None:
+def assert_the_teachers_checks(run, records, teacher_turns=()) -> None:
     """Issue 31: every turn of the automatic teacher is in the bag's teacher_checks, one check
     per teaching goal, and is redone from them alone (with the run's seed, RunStatus.seed): the
     entry its Demonstration shows, or its silence; and they are the runner's checks, number for
     number (the teacher's casts in its own world included)."""
     from sgim_nodes.bag.teacher_audit import redo
 
-    audited = redo(run.teacher_checks, run.run_status[0].seed)
+    audited = redo(run.teacher_checks, run.run_status[0].seed, teacher_turns)
     demos = [d for d in run.demonstrations if d.source == "automatic"]
     assert [(t.movement_index, t.help_request) for t in audited] == [
         (d.movement_index, d.help_request) for d in demos]
@@ -87,6 +87,32 @@ def assert_the_teachers_checks(run, records) -> None:
             assert np.array_equal(getattr(got, name), vec(want[name])), (name, where)
         assert got.distance == (np.inf if want["distance"] is None else want["distance"])
         assert got.tolerance == want["tolerance"], where
+
+
+def test_teachers_taking_turns_through_the_graph(ros_processes, ros_domain, tmp_path):
+    """Issue 33's SGIM-D arm: SGIM-ACTS's three teachers take the automatic teacher's turns,
+    each judging and showing its own part of the teaching set, rough its perturbed cast (a
+    means-only demonstration when it lands nowhere); the graph is the runner's run, and every
+    turn is redone from its checks with that turn's teacher's stream."""
+    from sgim_nodes.core.teacher_turns import turn_specs
+
+    names = ("centre", "west", "rough")
+    child = run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--param",
+                      f"tolerance_noise={TOLERANCE['sgim-d']}", "--param",
+                      f"teacher_turns={','.join(names)}")
+    later = runner_records_later("sgim-d", teacher_turns=turn_specs("fishing",
+                                                                     ",".join(names)))
+    run = finish(child, tmp_path, "sgim-d")
+    records = later.result()
+    assert bag_digest(run.movements) == runner_digest(records) != DIGESTS["sgim-d"]
+    shown = [r for r in records if r["type"] == "demonstration"]
+    assert [r["teacher"] for r in shown][:3] == list(names)  # the first turns show
+    demos = [d for d in run.demonstrations if len(d.action)]
+    assert [(d.movement_index, d.teaching_set_index) for d in demos] == [
+        (r["movement"], r["teaching_index"]) for r in shown]
+    assert [d.content for d in demos] == [
+        "means-only" if r["outcome"] is None else "means-and-goal" for r in shown]
+    assert_the_teachers_checks(run, records, names)
 
 
 def test_the_teachers_choice_rule_through_the_graph(ros_processes, ros_domain, tmp_path):

@@ -321,7 +321,9 @@ def check_teacher_check(c: Any, limits: Limits) -> Problem | None:
                                     f"{', '.join(TEACHER_CHOICES)}")
     entries, k = int(c.entries), int(c.teaching_set_index)
     size = limits.teaching_set_size
-    if not 0 <= k < entries or (size and k >= size):
+    # A turn judges the whole set, or one teacher's part of it when teachers take turns
+    # (core/teacher_turns.py): its entries are rows of the set, at most all of them.
+    if k < 0 or entries < 1 or (size and (k >= size or entries > size)):
         return Problem("unknown-teaching-index", f"teaching-set index {k} is not an entry of "
                                                  f"a turn of {entries} checks"
                                                  + (f" (the set has {size})" if size else ""))

@@ -7,19 +7,20 @@ TeacherCheck per teaching goal (teacher_checks), and this module redoes the turn
 verdicts from distance and tolerance, the entries the teacher could draw among
 (core/teaching.py, eligible), and the draw itself, with the teacher's random stream from the
 run's seed (RunStatus.seed). The draw replays only a run recorded in one piece (a resumed
-teacher starts its stream afresh); everything else holds for any bag. Nothing here imports
-rclpy.
+teacher starts its stream afresh); everything else holds for any bag. When teachers take the
+turns (core/teacher_turns.py), a turn judges one teacher's rows of the set only, and the draw
+is that teacher's stream: give their names, in turn order. Nothing here imports rclpy.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from sgim_nodes.bag.records import TeacherCheckRecord
-from sgim_nodes.core.random_streams import component_rng
+from sgim_nodes.core.random_streams import component_rng, member_rng
 from sgim_nodes.core.teaching import eligible
 
 
@@ -42,7 +43,7 @@ class AuditedTurn:
 
 
 class IncompleteTurn(ValueError):
-    """A turn's checks are not one per teaching-set entry (records lost or forged)."""
+    """A turn's checks are not one per entry it judges (records lost or forged)."""
 
 
 def turns(checks: Iterable[TeacherCheckRecord]) -> list[tuple[TeacherCheckRecord, ...]]:
@@ -63,7 +64,8 @@ def turns(checks: Iterable[TeacherCheckRecord]) -> list[tuple[TeacherCheckRecord
     for (movement, ask), group in grouped:
         group.sort(key=lambda c: c.teaching_set_index)
         first = group[0]
-        if ([c.teaching_set_index for c in group] != list(range(first.entries))
+        rows = [c.teaching_set_index for c in group]
+        if (len(rows) != first.entries or len(set(rows)) != len(rows)
                 or len({(c.entries, c.rule, c.choice, c.tolerance) for c in group}) != 1):
             raise IncompleteTurn(f"the turn at movement {movement} (help request {ask}) has "
                                  f"checks of entries {[c.teaching_set_index for c in group]}, "
@@ -72,16 +74,27 @@ def turns(checks: Iterable[TeacherCheckRecord]) -> list[tuple[TeacherCheckRecord
     return out
 
 
-def redo(checks: Iterable[TeacherCheckRecord], seed: int | None = None) -> list[AuditedTurn]:
-    """Every turn redone from its checks; with the run's `seed`, the teacher's draws too."""
-    rng = None if seed is None else component_rng(seed, "teacher")
+def redo(checks: Iterable[TeacherCheckRecord], seed: int | None = None,
+         teacher_turns: Sequence[str] = ()) -> list[AuditedTurn]:
+    """Every turn redone from its checks; with the run's `seed`, the teacher's draws too
+    (those of the teachers of `teacher_turns`, in turn, when they took the turns)."""
+    if seed is None:
+        streams = None
+    elif teacher_turns:
+        streams = [member_rng(seed, "teacher", name) for name in teacher_turns]
+    else:
+        streams = [component_rng(seed, "teacher")]
     audited = []
-    for group in turns(checks):
+    for k, group in enumerate(turns(checks)):
         first = group[0]
         asked = first.asked_goal if len(first.asked_goal) else None
-        pool = eligible(np.array([c.distance for c in group]), first.tolerance, first.choice,
-                        np.array([c.goal for c in group]), asked)
-        drawn = None if rng is None else -1 if len(pool) == 0 else int(rng.choice(pool))
+        rows = np.array([c.teaching_set_index for c in group], dtype=int)
+        places = eligible(np.array([c.distance for c in group]), first.tolerance,
+                          first.choice, np.array([c.goal for c in group]), asked)
+        pool = rows[places]
+        rng = None if streams is None else streams[k % len(streams)]
+        drawn = (None if rng is None else -1 if len(places) == 0
+                 else int(rows[int(rng.choice(places))]))
         marked = tuple(c.teaching_set_index for c in group if c.chosen)
         audited.append(AuditedTurn(first.movement_index, first.help_request, group, pool,
                                    drawn, marked))

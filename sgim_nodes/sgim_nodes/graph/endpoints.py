@@ -218,7 +218,9 @@ def arbiter_ready_endpoints() -> set[Endpoint]:
                              register=None, imitate=None)
     return {Endpoint("calls", service, "sgim_msgs/srv/RecorderReady",
                      note=f"when the run has {who}")
-            for service, who in expected.listeners}
+            for service, who in expected.listeners} | {
+        Endpoint("calls", "expert_ready", "sgim_msgs/srv/RecorderReady",
+                 note="sgim-acts: in the namespace of each of its teachers (/NAME/expert_ready)")}
 
 
 # The modules whose create_* calls compute their names, and where those names come from.
