@@ -54,6 +54,12 @@ class CommandError(ValueError):
     """A line that cannot be obeyed; the message says why, for the person who typed it."""
 
 
+@dataclass(frozen=True)
+class NoneThere:
+    """SGIM-ACTS asked this teacher (teacher/web_expert.py) and the person has nothing to
+    show near its goal: an empty answer to its oldest request."""
+
+
 # --- parsed commands ---------------------------------------------------------------------
 
 

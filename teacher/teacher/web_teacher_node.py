@@ -61,7 +61,7 @@ from sim_bridge import scaling
 from sim_bridge.data_files import load_teaching_set
 from sim_bridge.data_params import TEACHING_SET_FILE
 from sim_bridge.lake import is_water
-from teacher.human_commands import CommandError, PaceRequest
+from teacher.human_commands import CommandError, NoneThere, PaceRequest
 from teacher.human_decisions import (
     ExecuteFirst,
     LearnerState,
@@ -71,6 +71,7 @@ from teacher.human_decisions import (
 )
 from teacher.web.app import LAND_RGB, WATER_RGB, WebTeacher
 from teacher.web.server import Api, Refused, serve
+from teacher.web_expert import WEB_EXPERT, WebExpert
 
 PARAMS = (
     Param("host", "127.0.0.1", "interface to serve the page on; another than this machine's "
@@ -88,6 +89,8 @@ PARAMS = (
           "action", positive, "> 0"),
     Param("render_casts", True, "draw the latest demonstration's cast as a GIF for the page "
           "(a low-priority child process)"),
+    Param("expert", False, "SGIM-ACTS: answer the learner's requests as its teacher 'web' "
+          "(teacher/web_expert.py); false: teach SGIM-D or demo-only when the person likes"),
     # Not read-only: how long a finished run's page stays does not shape the run (and is
     # kept out of its fingerprint); it is read when the run ends.
     Param("linger", 0.0, "seconds the page stays after the run while someone looks at it, "
@@ -126,6 +129,8 @@ class WebTeacherNode(Node, Api):
             "run_status": self.create_subscription(RunStatus, "run_status", self._on_status,
                                                    qos.RECORDS)})
         self.create_subscription(PaceState, "pace_state", self._on_pace, qos.LATEST_STATE)
+        self.expert = WebExpert(self, self.app.say) if p["expert"] else None
+        self.app.expert = WEB_EXPERT if p["expert"] else ""
         self._execute = self.create_client(ExecuteAction, "execute_action")
         self._pace = self.create_client(Pace, "pace")
         self._lake = lake_png()
@@ -277,6 +282,8 @@ class WebTeacherNode(Node, Api):
         try:
             if isinstance(decision, SendDemonstration):
                 done.set_result(self._send(decision))
+            elif isinstance(decision, NoneThere):
+                done.set_result(self._none_there())
             elif isinstance(decision, ExecuteFirst):
                 if not self._execute.service_is_ready():
                     raise CommandError("the simulator's execute_action service is not "
@@ -330,17 +337,34 @@ class WebTeacherNode(Node, Api):
             if self._demos.get_subscription_count() == 0:
                 raise CommandError("nobody subscribes to 'demonstrations' (is the learner "
                                    "running?): nothing sent")
+            stamp = self.get_clock().now().to_msg()
+            msg = (None if self.expert is None else  # the oldest request's answer
+                   self.expert.answer(stamp, learner.demonstrations + 1, demo.action,
+                                      demo.outcome, demo.teaching_set_index))
             learner.demonstrations += 1
-            number, at = learner.demonstrations, learner.movement_count
+            number = learner.demonstrations
+            at = learner.movement_count if msg is None else msg.movement_index
             self.app.demonstration_sent(number, at)
-        self._demos.publish(Demonstration(
-            stamp=self.get_clock().now().to_msg(), index=number, movement_index=at,
+        self._demos.publish(msg or Demonstration(
+            stamp=stamp, index=number, movement_index=at,
             action=[float(v) for v in demo.action], outcome=[float(v) for v in demo.outcome],
             teaching_set_index=demo.teaching_set_index, source="web"))
         text = f"sent demonstration {number} at movement {at}: {demo.text}"
+        if msg is not None:
+            text += f" ({self.expert.describe(msg)})"
         self.app.say(text, "sent")
         self._queue_render(demo.action, f"demonstration {number}: {demo.text}")
         return {"ok": True, "message": text, "demonstration": number, "movement": at}
+
+    def _none_there(self) -> dict[str, Any]:
+        if self.expert is None:
+            raise CommandError("nobody asked: 'none there' answers SGIM-ACTS's requests, and "
+                               "this run's learner teaches itself from what you show")
+        msg = self.expert.none_there(self.get_clock().now().to_msg())
+        self._demos.publish(msg)
+        text = self.expert.describe(msg)
+        self.app.say(text, "sent")
+        return {"ok": True, "message": text}
 
     # --- the cast picture ---------------------------------------------------------------------
 

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from sgim_nodes.view.picture import LivePicture
-from teacher.human_commands import CommandError, PaceRequest
+from teacher.human_commands import CommandError, NoneThere, PaceRequest
 from teacher.human_decisions import ExecuteFirst, LearnerState, SendDemonstration, TeachingLibrary
 from teacher.web.app import WebTeacher
 from teacher.web.server import Api, Refused, TeacherServer
@@ -62,6 +62,29 @@ def test_page_commands_become_the_terminals_decisions(app):
     pasted = app.decide({"command": "action", "text": "[" + ", ".join(["0.25"] * A) + "]"})
     assert isinstance(pasted, ExecuteFirst) and np.allclose(pasted.action, 0.25)
     assert app.decide({"command": "pace", "what": "step", "steps": 4}) == PaceRequest("step", 4)
+    assert app.decide({"command": "none"}) == NoneThere()  # SGIM-ACTS asked: nothing there
+    assert app.state()["expert"] == ""  # the page shows its "none there" box only when asked
+
+
+def test_the_web_expert_answers_the_oldest_request_and_refuses_when_none_is_open():
+    """teacher/web_expert.py without ROS: what each answer says, and the refusal."""
+    from sgim_msgs.msg import HelpRequest
+    from teacher.web_expert import WebExpert
+
+    expert = WebExpert.__new__(WebExpert)  # its ROS half (subscriptions) is the node's
+    expert.name, expert.source, expert.open, expert.answered = "web", "expert:web", [], set()
+    with pytest.raises(CommandError, match="not asked you anything"):
+        expert.none_there(None)
+    expert.open = [HelpRequest(index=3, movement_index=40, goal=[0.1, 0.2], teacher="web",
+                               content="goal-only"),
+                   HelpRequest(index=4, movement_index=40, goal=[0.3, 0.2], teacher="web",
+                               content="means-and-goal")]
+    emulation = expert.answer(None, 7, ACTIONS[1], [0.5, 0.5], 1)
+    assert (emulation.help_request, emulation.movement_index, list(emulation.action),
+            list(emulation.outcome), emulation.source) == (3, 40, [], [0.5, 0.5], "expert:web")
+    empty = expert.none_there(None)
+    assert empty.help_request == 4 and not len(empty.action) and not len(empty.outcome)
+    assert expert.answered == {3, 4} and not expert.open
 
 
 @pytest.mark.parametrize(("body", "words"), [

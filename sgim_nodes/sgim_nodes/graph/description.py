@@ -29,6 +29,7 @@ from sgim_ros.params import Param, ParameterError
 LEARNER_CONFIG = Path(__file__).resolve().parents[2] / "config" / "learner.yaml"
 SOCIAL = ("sgim-d", "demo-only")
 ACTS = "sgim-acts"  # nodes/ros_glue.ACTS
+WEB_EXPERT = "web"  # teacher/web_expert.WEB_EXPERT: the web teacher among SGIM-ACTS's teachers
 LEARNER_NAMES = CORE_LEARNER_NAMES
 """The learners the graph runs: every one the core builds."""
 TEACHERS = ("automatic", "human", "web", "external")
@@ -166,13 +167,15 @@ def acts_teachers(overrides: Mapping[str, Any]) -> list[str]:
 def graph(learner: str, teacher: str = "automatic", markers: bool = True,
           teachers: Sequence[str] | None = None) -> list[NodeSpec]:
     """The nodes a run of `learner` needs, the recorder first and the arbiter last; for
-    sgim-acts, an expert per name of `teachers` (None: the default ones)."""
+    sgim-acts, an expert per name of `teachers` (None: the default ones), the web teacher
+    answering as "web" when the run's teacher is the web page."""
     names = ["recorder", "sim_bridge", "evaluator"] + (["markers"] if markers else [])
     if learner in GOAL_BABBLERS or learner == ACTS:
         names += ["interest_computer", "goal_generator", "low_level_explorer"]
     if learner == ACTS:
-        experts = [NODES["expert"].in_namespace(name)
-                   for name in (acts_teachers({}) if teachers is None else teachers)]
+        asked = acts_teachers({}) if teachers is None else teachers
+        experts = [NODES["web_teacher"] if name == WEB_EXPERT and teacher == "web"
+                   else NODES["expert"].in_namespace(name) for name in asked]
         return [*(NODES[name] for name in names), NODES["imitation"], *experts,
                 NODES[ARBITER]]
     if learner in SOCIAL:
@@ -191,11 +194,14 @@ MOVEMENT_LISTENERS = ("recorder", "evaluator", "markers", "low_level_explorer", 
                       "teacher", "web_teacher")
 
 
-def movement_listeners(options: RunOptions) -> list[str]:
+def movement_listeners(options: RunOptions, teachers: Sequence[str] | None = None
+                       ) -> list[str]:
     """The nodes of this run's graph that the simulator waits for (sim_bridge's
-    `movement_listeners`) before it serves a movement, at its start and after a restart."""
+    `movement_listeners`) before it serves a movement, at its start and after a restart;
+    `teachers`: sgim-acts's (None: those of the options)."""
+    names = acts_teachers(options.overrides) if teachers is None else teachers
     return [spec.name for spec in graph(options.learner, options.teacher, options.markers,
-                                        acts_teachers(options.overrides))
+                                        names)
             if spec.name in MOVEMENT_LISTENERS]
 
 
@@ -342,18 +348,27 @@ def parameters(options: RunOptions, node_overrides: Mapping[str, Mapping[str, An
             f"parameter '{name}' is set by {OPTION_PARAMETERS[name]}, not as a parameter"
             for name in clash))
     values = {**learner_defaults(), **options.overrides}
+    if options.learner == ACTS and options.teacher == "web":  # the page is one of them
+        names = acts_teachers(options.overrides)
+        values["teachers"] = ",".join([*names, *([] if WEB_EXPERT in names else [WEB_EXPERT])])
     values.update(
         learner=options.learner, seed=options.seed, movements=options.movements,
         eval_every=options.eval_every, demonstration_period=options.period,
         teacher=ARBITER_TEACHER[options.teacher] if options.learner in SOCIAL else "none",
         storage=options.storage, wait_for_recorder=True,
-        movement_listeners=",".join(movement_listeners(options)),
+        movement_listeners=",".join(movement_listeners(options, acts_teachers(values))),
         wait_for_teacher=options.wait_for_teacher)
     if options.output:
         values["output"] = options.output
-    if options.teacher == "web" and options.learner in SOCIAL:
+    if options.teacher == "web" and options.learner in (*SOCIAL, ACTS):
         values.update(host=options.web_host, port=options.web_port, token=options.web_token,
                       address_file=options.web_address_file, linger=float(options.web_linger))
+    if options.learner == ACTS and WEB_EXPERT in acts_teachers(values):
+        if options.teacher != "web":
+            raise ParameterError(f"teacher '{WEB_EXPERT}' among sgim-acts's teachers is the "
+                                 "web page: run it with --teacher web")
+        values["expert"] = True
+        values.setdefault("teacher_timeout", 3600.0)  # a person answers, not a node
     problems = []
     try:
         shared = check(values, where)

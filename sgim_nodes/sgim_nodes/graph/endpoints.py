@@ -220,7 +220,9 @@ def arbiter_ready_endpoints() -> set[Endpoint]:
                      note=f"when the run has {who}")
             for service, who in expected.listeners} | {
         Endpoint("calls", "expert_ready", "sgim_msgs/srv/RecorderReady",
-                 note="sgim-acts: in the namespace of each of its teachers (/NAME/expert_ready)")}
+                 note="sgim-acts: in the namespace of each of its teachers (/NAME/expert_ready)"),
+        Endpoint("calls", "web/expert_ready", "sgim_msgs/srv/RecorderReady",
+                 note="sgim-acts with the web page among its teachers")}
 
 
 # The modules whose create_* calls compute their names, and where those names come from.

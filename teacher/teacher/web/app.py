@@ -25,6 +25,8 @@ Page commands (JSON objects, POST /api/command):
   {"command": "action", "text": "...", "key": K} 24 pasted numbers; the outcome is measured
   {"command": "pace", "what": "pause"|"resume"|"step", "steps": N}
   {"command": "close"}                           the run is over: stop serving the page
+  {"command": "none"}                            SGIM-ACTS asked (the web teacher is one of
+                                                 its experts): nothing to show near its goal
 """
 
 from __future__ import annotations
@@ -52,6 +54,7 @@ from sgim_ros.clip import clipped, value_text
 from teacher.human_commands import (
     CommandError,
     GoalPoint,
+    NoneThere,
     PaceRequest,
     Teach,
     parse_numbers,
@@ -139,6 +142,7 @@ class WebTeacher:
     def __init__(self, library: TeachingLibrary, picture: LivePicture,
                  state: LearnerState) -> None:
         self.library, self.picture, self.learner = library, picture, state
+        self.expert = ""  # the name SGIM-ACTS asks it by (web_expert.py); "": it teaches freely
         self.lock = threading.RLock()
         self.pace = PaceView()
         self.log: deque[tuple[int, str, str]] = deque(maxlen=LOG_LINES)  # (number, level, text)
@@ -180,6 +184,7 @@ class WebTeacher:
                 "run": {"state": pic.run_state, "message": pic.run_message,
                         "refusal": learner.refusal()},
                 "demonstrations_given": learner.demonstrations,
+                "expert": self.expert,
                 "landings": {
                     "from": start,
                     "x": [round(v, 4) for v in pic.xs[start:]],
@@ -383,8 +388,10 @@ class WebTeacher:
                 return ExecuteFirst(action, None, "the pasted action")
             if name == "close":
                 return self._close()
+            if name == "none":
+                return NoneThere()
         raise CommandError(f"unknown command {shown(name)}: teach, offer, confirm, action, "
-                           "pace or close")
+                           "pace, none or close")
 
     def _close(self) -> dict:
         if not (self.picture.over or self.learner.run_over):

@@ -306,6 +306,7 @@
     if ($("progress-bar").style.width !== width) $("progress-bar").style.width = width;
     setText("failed", s.failed);
     setText("demos", s.demonstrations_given);
+    $("requests").classList.toggle("hidden", !s.expert);
     if (s.landings.x.length || (s.landings.from === 0 && stats.landings > 0)) {
       drawLandings(s.landings);
     }
@@ -525,6 +526,7 @@
   $("resume").addEventListener("click", () => command({ command: "pace", what: "resume" }));
   $("step").addEventListener("click", () =>
     command({ command: "pace", what: "step", steps: Number($("step-count").value) || 1 }));
+  $("none-there").addEventListener("click", () => command({ command: "none" }));
   $("send-action").addEventListener("click", () =>
     demonstrate({ command: "action", text: $("action-text").value }));
   $("close").addEventListener("click", async () => {
