@@ -542,3 +542,59 @@ def test_the_human_teacher_script_drives_a_run_through_the_prompt(
 
 if __name__ == "__main__":
     sys.exit(pytest.main([__file__, "-x", "-q"]))
+
+
+def test_an_interrupted_sgim_acts_run_resumes_and_goes_on_asking(ros_processes, ros_domain,
+                                                                 tmp_path):
+    """SGIM-ACTS resumed: its goal generator rebuilds each strategy's history from the
+    recorded competences, its requests go on numbering after the recorded ones, and the run
+    reaches its budget with every answer naming its own request."""
+    import signal
+    import time
+    import warnings
+
+    import yaml
+
+    from sgim_nodes.bag.reader import read_messages
+    from sgim_nodes.bag.resume import load_run_folder, segments
+
+    movements, cut = 600, tmp_path / "cut"
+    common = ["--domain", str(ros_domain), "--quiet", "--timeout", "600"]
+    first = ros_processes.start("acts-cut", [
+        RUN, "sgim-acts", "--seed", "3", "--movements", str(movements), "--eval-every", "200",
+        "--runs-dir", str(tmp_path), "--name", "cut", *common],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+
+    def recorded() -> int:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                return max((m.index for _, _, m in read_messages(cut / "bag", ["movements"])),
+                           default=0)
+            except Exception:  # no finished part yet
+                return 0
+
+    deadline = time.monotonic() + 300
+    while recorded() < 60:
+        assert time.monotonic() < deadline and first.poll() is None, "the run did not reach 60"
+        time.sleep(0.3)
+    first.send_signal(signal.SIGINT)
+    output, _ = first.communicate(timeout=120)
+    assert first.returncode == 130, output[-3000:]  # it had not finished
+    asked_before = len(load_run_folder(cut).help_requests)
+
+    second = ros_processes.start("acts-resumed", [RUN, "--resume", str(cut), *common],
+                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    output, _ = second.communicate(timeout=600)
+    assert second.returncode == 0, output[-3000:]
+    assert [p.name for p in segments(cut)] == ["bag", "bag.resume1"]
+    run = load_run_folder(cut)
+    assert [m.index for m in run.movements] == list(range(1, movements + 1))
+    indices = [h.index for h in run.help_requests]
+    assert len(indices) > asked_before > 0 and indices == sorted(set(indices))
+    replies = [d.help_request for d in run.demonstrations if d.help_request]
+    assert sorted(replies) == sorted(set(replies)) and set(replies) <= set(indices)
+    assert {c.strategy for c in run.competences} >= {"autonomous"}
+    meta = yaml.safe_load((cut / "metadata.yaml").read_text())
+    assert meta["outcome"] == "finished" and len(meta["resumed"]) == 1
+    assert meta["quarantine"]["total"] == 0, meta["quarantine"]

@@ -90,15 +90,19 @@ class GoalGenerator(AsyncNode):
         self.goal_count = 0
         tree, folded = region_tree_for(c, world_scale(values)), 0
         if self.acts:
-            if values["resume_from"]:
-                raise ParameterError("sgim-acts cannot resume a run yet: its strategies' "
-                                     "histories are not rebuilt from a bag")
             self.strategy_regions, self.chooser = acts_choice(c, world_scale(values),
                                                               values["teachers"])
         if values["resume_from"]:
             point = resume_point(values["resume_from"], c, values["resume_segments"])
             self.goal_count = point.goal_index
             tree, folded = point.state.tree, point.state.n_competences
+            if self.acts:  # each competence into its strategy's history, as the tree folds it
+                for comp in sorted(point.records.competences, key=lambda r: r.movement_index):
+                    try:
+                        self.strategy_regions.add(comp.strategy, comp.goal, comp.competence)
+                    except ValueError as error:
+                        raise ParameterError(f"resume: the recorded competence of goal "
+                                             f"{comp.goal_index}: {error}") from error
         self.regions = LiveRegions(tree, folded)
         self.selector = GoalSelector(self.regions, goal_mode_probabilities(c, values["learner"]),
                                      c.distances(world_scale(values)).mode3_radius)

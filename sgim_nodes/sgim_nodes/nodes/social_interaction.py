@@ -101,9 +101,6 @@ class SocialInteraction(AsyncNode):
         self.p = values
         self.learner = values["learner"]
         self.acts = self.learner == ACTS
-        if self.acts and values["resume_from"]:
-            raise ParameterError("sgim-acts cannot resume a run yet: its strategies' "
-                                 "histories are not rebuilt from a bag")
         self.total = values["movements"]
         social = self.learner in SOCIAL and values["teacher"] != "none"
         self.automatic = social and values["teacher"] == "automatic"
@@ -162,6 +159,9 @@ class SocialInteraction(AsyncNode):
     def _resume(self, point) -> None:
         self.count = point.count
         self.goals_folded = point.state.n_competences
+        if self.episodes is not None:  # its requests go on numbering after the recorded ones
+            self.episodes.requests = max((h.index for h in point.records.help_requests),
+                                         default=0)
         self.turns_taken = set(point.demonstration_turns)
         self.evaluated = set(point.evaluated)
         if self.asks is not None:
