@@ -45,6 +45,8 @@ GOALS = ["interest_computer", "goal_generator", "low_level_explorer"]
     ("sgim-d", "web", [*BASE, *GOALS, "imitation", "web_teacher", "social_interaction"]),
     ("demo-only", "external", [*BASE, "imitation", "social_interaction"]),
     ("random-goals", "automatic", [*BASE, *GOALS, "social_interaction"]),
+    ("sgim-acts", "automatic", [*BASE, *GOALS, "imitation", "centre/expert", "west/expert",
+                                "rough/expert", "social_interaction"]),
 ])
 def test_each_learner_gets_its_nodes(learner, teacher, expected):
     from sgim_nodes.graph.description import graph
@@ -359,6 +361,8 @@ def _what_nodes_read(params_file: Path, spec) -> dict:
                                                   ("saggriac", "automatic"),
                                                   ("demo-only", "external"),
                                                   ("sgim-d", "web"),
+                                                  ("sgim-acts", "automatic"),
+                                                  ("sgim-acts", "web"),
                                                   ("random", "automatic")])
 def test_the_launch_file_starts_what_run_experiment_starts(tmp_path, learner, teacher):
     from sgim_nodes.graph.experiment import plan_new
@@ -389,6 +393,33 @@ def test_the_launch_file_starts_what_run_experiment_starts(tmp_path, learner, te
     assert launched["sim_bridge"][2]["noise"] == 0.01
     assert launched["evaluator"][2].get("noise") is None  # the section is the simulator's
     assert all(kw["respawn"] == (name == "sim_bridge") for name, kw in launch)
+
+
+def test_sgim_acts_teachers_are_experts_in_their_namespaces_and_the_page_is_web():
+    """Issue 33: each of sgim-acts's teachers is an expert node in the namespace of its name,
+    the launcher starts it there, and the web page joins them as 'web' with --teacher web."""
+    from sgim_nodes.graph.description import RunOptions, acts_teachers, graph, parameters
+    from sgim_ros.params import ParameterError
+
+    values = parameters(RunOptions("sgim-acts", overrides={"teachers": "west,north_arm"}))
+    nodes = graph("sgim-acts", "automatic", True, acts_teachers(values.shared))
+    experts = [(s.namespace, s.executable) for s in nodes if s.namespace]
+    assert experts == [("west", "expert"), ("north_arm", "expert")]
+    web = parameters(RunOptions("sgim-acts", teacher="web"))
+    assert web.shared["teachers"] == "centre,west,rough,web" and web.shared["expert"] is True
+    assert web.shared["teacher_timeout"] == 3600.0  # a person answers
+    names = [s.name for s in graph("sgim-acts", "web", True, acts_teachers(web.shared))]
+    assert "web_teacher" in names and "web/expert" not in names
+    with pytest.raises(ParameterError, match="--teacher web"):
+        parameters(RunOptions("sgim-acts", overrides={"teachers": "centre,web"}))
+    with pytest.raises(ParameterError, match="teachers"):
+        parameters(RunOptions("sgim-acts", overrides={"teachers": "centre,9bad"}))
+    # A per-node section for one expert is checked against the expert's parameters.
+    own = parameters(RunOptions("sgim-acts"), {"west/expert": {"precision": 0.05}})
+    assert own.per_node["west/expert"] == {"precision": 0.05}
+    assert "/west/expert" in own.to_yaml()
+    with pytest.raises(ParameterError, match="unknown parameter 'zeta2'"):
+        parameters(RunOptions("sgim-acts"), {"west/expert": {"zeta2": 1}})
 
 
 def test_the_launch_file_builds_a_launch_description_with_launch_ros(monkeypatch, tmp_path):
