@@ -31,7 +31,9 @@ PARAMS = learner_node_params(
     Param("startup_timeout", 120.0, "seconds to wait for the other nodes (their servers, "
           "publishers and the listeners' *_ready services, sgim_ros/ready.py) before the start",
           positive),
-    Param("teacher_timeout", 60.0, "seconds to wait for the teacher at a boundary", positive,
+    Param("teacher_timeout", 60.0, "seconds to wait for the teacher at a boundary, or for "
+          "the answer to a request (sgim-acts; 3600 when the web page is one of its teachers)",
+          positive,
           read_only=False),
     Param("call_timeout", 600.0, "seconds to wait for the answer of register_demonstration, "
           "or for the result of a reach_goal or imitate job", positive, read_only=False),
