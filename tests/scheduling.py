@@ -50,7 +50,7 @@ SECONDS: dict[str, float] = {
     "tests/ros/test_rogue_records.py": 56,
     "tests/ros/test_graph_runs.py::test_the_teachers_choice_rule_through_the_graph": 53,
     "tests/ros/test_graph_runs.py::test_an_interrupted_sgim_acts_run_resumes_and_goes_on_"
-    "asking": 78,
+    "asking": 70,
     "tests/ros/test_acts_web_teacher.py": 51,
     "tests/ros/test_graph_runs.py::test_teachers_taking_turns_through_the_graph": 46,
     "tests/ros/test_graph_runs.py::test_sgim_acts_through_the_graph": 41,

@@ -558,10 +558,10 @@ def test_an_interrupted_sgim_acts_run_resumes_and_goes_on_asking(ros_processes, 
     from sgim_nodes.bag.reader import read_messages
     from sgim_nodes.bag.resume import load_run_folder, segments
 
-    movements, cut = 600, tmp_path / "cut"
+    movements, cut = 360, tmp_path / "cut"
     common = ["--domain", str(ros_domain), "--quiet", "--timeout", "600"]
     first = ros_processes.start("acts-cut", [
-        RUN, "sgim-acts", "--seed", "3", "--movements", str(movements), "--eval-every", "200",
+        RUN, "sgim-acts", "--seed", "3", "--movements", str(movements), "--eval-every", "120",
         "--runs-dir", str(tmp_path), "--name", "cut", *common],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
