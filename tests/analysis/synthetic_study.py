@@ -4,7 +4,8 @@ Layout as run_study.sh writes it: <study>/<learner>-seed<N>/bag/ and metadata.ya
 Each run has 20 movements, evaluations at 0, 10 and 20, and (for tree learners) region maps.
 Every run's metadata carries a learner fingerprint, by default one shared by all (FINGERPRINT);
 fingerprint(**fields) makes another, and write_run(..., fingerprint=None) a run made before
-fingerprints.
+fingerprints. acts_records and demonstrations_at add what an SGIM-ACTS run records (its
+requests, the experts' answers, the episodes' strategies) and an SGIM-D run's demonstrations.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ import numpy as np
 import yaml
 
 from sgim_nodes.provenance.fingerprint import Fingerprint, canonical
-from sim_bridge.lake import ISOLATED_REGION
+from sim_bridge.lake import ISOLATED_REGION, Lake
 from tests.bag.samples import T, region, stamp, write_bag
 
 N_MOVES = 20
@@ -75,21 +76,24 @@ def region_map(index: int, split: bool):
                                         regions=regions)
 
 
-def run_status(learner: str, seed: int, index: int, state: int):
+def run_status(learner: str, seed: int, index: int, state: int, total: int = N_MOVES):
     return T["sgim_msgs/msg/RunStatus"](stamp=stamp(index), learner=learner, seed=seed,
-                                        movement_index=index, total_movements=N_MOVES,
+                                        movement_index=index, total_movements=total,
                                         state=state, message="")
 
 
 def run_messages(learner: str, seed: int, evals: dict[int, float],
                  inside: dict[int, int] | None = None, failed: tuple[int, ...] = (7,),
-                 maps: bool = False) -> list[tuple[str, object]]:
-    """Movements 1..20 landing OUTSIDE except `inside` (index -> process) and `failed`."""
-    inside = inside or {}
+                 maps: bool = False, extra: dict[int, list] | None = None
+                 ) -> list[tuple[str, object]]:
+    """Movements 1..20 landing OUTSIDE except `inside` (index -> process) and `failed`;
+    `extra`: records published at a movement count, before the next movement."""
+    inside, extra = inside or {}, extra or {}
     out: list[tuple[str, object]] = [("run_status", run_status(learner, seed, 0, 0))]
     if 0 in evals:
         out.append(("evaluations", evaluation(0, evals[0])))
     for i in range(1, N_MOVES + 1):
+        out += extra.get(i - 1, [])
         if i in failed:
             out.append(("movements", movement(i, None, status=1)))
         else:
@@ -105,13 +109,17 @@ def run_messages(learner: str, seed: int, evals: dict[int, float],
 
 def write_run(study: Path, learner: str, seed: int, messages: list[tuple[str, object]],
               duration_s: float = 10.0, fingerprint: dict[str, Any] | None = FINGERPRINT,
+              name: str | None = None, parameters: dict[str, Any] | None = None,
               **writer_kwargs) -> Path:
-    """One run folder; ``fingerprint=None``: a run made before fingerprints."""
-    run_dir = study / f"{learner}-seed{seed}"
+    """One run folder (``name``: its folder, else <learner>-seed<N>); ``fingerprint=None``: a
+    run made before fingerprints; ``parameters``: its metadata's."""
+    run_dir = study / (name or f"{learner}-seed{seed}")
     run_dir.mkdir(parents=True)
     write_bag(run_dir / "bag", messages, **writer_kwargs)
     meta = {"learner": learner, "seed": seed, "movements": N_MOVES, "outcome": "finished",
             "duration_s": duration_s}
+    if parameters is not None:
+        meta["parameters"] = parameters
     if fingerprint is not None:
         meta["fingerprint"] = fingerprint
     (run_dir / "metadata.yaml").write_text(yaml.safe_dump(meta))
@@ -132,3 +140,76 @@ def write_study(study: Path, seeds: int = 3, learners: tuple[str, ...] = ("sgim-
                       duration_s=10.0 + seed,
                       fingerprint=fingerprints.get(f"{learner}-seed{seed}", FINGERPRINT))
     return study
+
+
+def part_points() -> dict[str, tuple[float, float]]:
+    """A goal (normalised outcome units) in each named part of the lake and on land: the first
+    point of a regular grid that lies there."""
+    lake, found = Lake(), {}
+    for x in np.linspace(-0.95, 0.95, 39):
+        for y in np.linspace(-0.95, 0.95, 39):
+            found.setdefault(lake.part_of_outcome((x, y)), (float(x), float(y)))
+    return found
+
+
+ACTS_EPISODES = [
+    (0, "autonomous", "basin", True),
+    (2, "mimicry:centre", "basin", True),
+    (4, "emulation:rough", "west", False),
+    (6, "autonomous", "basin", True),
+    (10, "mimicry:centre", "north", False),
+    (12, "emulation:west", "pond", True),
+    (14, "mimicry:rough", "basin", False),
+    (15, "mimicry:centre", "basin", False),
+    (16, "autonomous", "east", True),
+    (18, "mimicry:west", "land", False),
+]
+"""An SGIM-ACTS run of 20 movements: 7 requests, 2 answers that showed what was asked for
+(taken); in the last 10 movements 5 requests, 4 about a part one precise expert knows (north
+and basin: centre's, the pond: west's), 3 of them sent to it, and 1 to rough. Per window of 10
+movements: 4 episodes then 6, autonomous 2 of the first 4."""
+
+
+def acts_records(episodes: list[tuple[int, str, str, bool]]) -> dict[int, list]:
+    """An SGIM-ACTS run's records for ``episodes`` (movement count when chosen, strategy, part
+    of the world its goal lies in, answered): the Goal naming the strategy; for a social one,
+    the request to its teacher, the answer (empty: "none there") and, when answered, the
+    demonstration taken; by movement count, for run_messages' ``extra``."""
+    points, out = part_points(), {}
+    requests = 0
+    for k, (count, strategy, part, answered) in enumerate(episodes, 1):
+        point = np.asarray(points[part])
+        records = out.setdefault(count, [])
+        records.append(("goals", T["sgim_msgs/msg/Goal"](
+            stamp=stamp(count), index=k, movement_index=count, point=point, region_id=0,
+            mode=1, strategy=strategy)))
+        kind, _, teacher = strategy.partition(":")
+        if not teacher:
+            continue
+        requests += 1
+        content = "means-and-goal" if kind == "mimicry" else "goal-only"
+        records.append(("help_requests", T["sgim_msgs/msg/HelpRequest"](
+            stamp=stamp(count), index=requests, movement_index=count, goal=point,
+            teacher=teacher, content=content)))
+        shown = answered and kind == "mimicry"
+        answer = T["sgim_msgs/msg/Demonstration"](
+            stamp=stamp(count), index=requests, movement_index=count,
+            action=np.zeros(24) if shown else np.zeros(0),
+            outcome=point if answered else np.zeros(0), teaching_set_index=0,
+            source=f"expert:{teacher}", content=content, help_request=requests)
+        records.append(("demonstrations", answer))
+        if answered:
+            records.append(("demonstrations_taken", answer))
+    return out
+
+
+def demonstrations_at(counts: list[int]) -> dict[int, list]:
+    """A periodic teacher's demonstrations, one shown and taken at each movement count."""
+    out: dict[int, list] = {}
+    for k, count in enumerate(counts, 1):
+        demo = T["sgim_msgs/msg/Demonstration"](
+            stamp=stamp(count), index=k, movement_index=count, action=np.zeros(24),
+            outcome=np.asarray(OUTSIDE), teaching_set_index=k, source="automatic",
+            content="means-and-goal", help_request=0)
+        out[count] = [("demonstrations", demo), ("demonstrations_taken", demo)]
+    return out

@@ -72,3 +72,87 @@ def test_a_runner_run_s_requests_and_choices_are_read_back():
     share = expert_share(asks, FISHING_EXPERTS, Lake().part_of_outcome)
     owned = [a for a in asks if Lake().part_of_outcome(a.goal) != "land"]
     assert share.total == len(owned)
+
+
+def _acts_run(tmp_path):
+    from synthetic_study import ACTS_EPISODES, acts_records, run_messages, write_run
+
+    from sgim_nodes.analysis.study import load_run_data
+
+    evals = {0: 0.9, 10: 0.5, 20: 0.3}
+    run_dir = write_run(tmp_path, "sgim-acts", 0, run_messages(
+        "sgim-acts", 0, evals, extra=acts_records(ACTS_EPISODES)))
+    return run_dir, load_run_data(run_dir)
+
+
+def test_a_graph_run_s_requests_and_strategies_are_read_from_its_bag(tmp_path):
+    from synthetic_study import ACTS_EPISODES, part_points
+
+    from sgim_nodes.analysis.strategy_choices import asks_from_run, run_strategy_shares
+    from sim_bridge.lake import Lake
+
+    _, run = _acts_run(tmp_path)
+    asks = asks_from_run(run)
+    social = [(c, s, p) for c, s, p, _ in ACTS_EPISODES if ":" in s]
+    assert [(a.movement, a.teacher) for a in asks] == [(c, s.partition(":")[2])
+                                                       for c, s, _ in social]
+    points = part_points()
+    assert [tuple(a.goal) for a in asks] == [pytest.approx(points[p]) for _, _, p in social]
+    assert run.ask_content.tolist()[:3] == ["means-and-goal", "goal-only", "means-and-goal"]
+    assert run.demo_index.tolist() == [2, 12]  # the answers that showed what was asked for
+    assert run.demo_source.tolist() == ["expert:centre", "expert:west"]
+    assert run.choice_index.tolist() == [c for c, *_ in ACTS_EPISODES]
+    windows = run_strategy_shares(run, 10)
+    assert [start for start, _ in windows] == [0, 10]
+    assert windows[0][1] == pytest.approx({"autonomous": 0.5, "mimicry:centre": 0.25,
+                                           "emulation:rough": 0.25})
+    assert sum(windows[1][1].values()) == pytest.approx(1.0)
+    late = in_window(asks, run.total_movements, 10)
+    assert len(late) == 5
+    share = expert_share(late, FISHING_EXPERTS, Lake().part_of_outcome)
+    assert (share.hits, share.total) == (3, 4)
+    assert teacher_share(late, "rough").hits == 1
+
+
+def test_the_cache_keeps_the_requests_and_an_older_cache_is_read_again(tmp_path, monkeypatch):
+    from sgim_nodes.analysis import study as study_module
+    from sgim_nodes.analysis.study import CACHE_NAME, bag_fingerprint, load_run_data
+
+    run_dir, first = _acts_run(tmp_path)
+    monkeypatch.setattr(study_module, "_read_run", lambda run_dir: 1 / 0)  # cached: not read
+    second = load_run_data(run_dir)
+    for name in ("ask_index", "ask_teacher", "ask_content", "ask_goal", "choice_index",
+                 "choice_strategy", "demo_source"):
+        np.testing.assert_array_equal(getattr(first, name), getattr(second, name))
+    monkeypatch.undo()
+    # A cache of the format before these columns: its key names version 2, so it is not used.
+    with np.load(run_dir / CACHE_NAME) as data:
+        old = {k: data[k] for k in data.files
+               if not k.startswith(("ask_", "choice_", "demo_source"))}
+    old["fingerprint"] = np.array(bag_fingerprint(run_dir).replace("v3|", "v2|", 1))
+    np.savez_compressed(run_dir / CACHE_NAME, **old)
+    assert load_run_data(run_dir).ask_index.tolist() == first.ask_index.tolist()
+
+
+def test_a_run_without_requests_has_none(study):
+    from sgim_nodes.analysis.strategy_choices import asks_from_run, run_strategy_shares
+    from sgim_nodes.analysis.study import load_study
+
+    run = load_study(study).runs_of("sgim-d")[0]
+    assert asks_from_run(run) == [] and run_strategy_shares(run, 10) == []
+    assert run.ask_goal.shape == (0, 2) and run.choice_strategy.shape == (0,)
+
+
+def test_runs_weigh_the_same_in_the_mean_shares_and_counts():
+    from collections import Counter
+
+    from sgim_nodes.analysis.strategy_choices import mean_counts, mean_shares
+
+    one = [(0, {"autonomous": 1.0}), (10, {"autonomous": 0.5, "mimicry:west": 0.5})]
+    other = [(0, {"mimicry:west": 1.0})]  # chose nothing in the second window
+    shares = mean_shares([one, other])
+    assert shares == {0: {"autonomous": 0.5, "mimicry:west": 0.5},
+                      10: {"autonomous": 0.5, "mimicry:west": 0.5}}
+    counts = mean_counts([[(0, Counter(west=4))], [(0, Counter(west=2, rough=1)),
+                                                   (10, Counter(rough=3))]])
+    assert counts == {0: {"rough": 0.5, "west": 3.0}, 10: {"rough": 1.5, "west": 0.0}}

@@ -8,6 +8,8 @@
   landings_frames.png  the same for each separate time frame (what was explored when)
   region_tree.png   the leaves of the interest tree at chosen times, coloured by interest, for
                     one seed of each learner that builds a tree (sgim-d, saggriac)
+  strategy shares   SGIM-ACTS's choices per window of movements (plot_strategy_shares): the
+                    share of each strategy among its episodes, and whom it asked
 
 Why pooled histograms with a shared log scale: a learner's landings pile up in the main basin by
 orders of magnitude; a linear scale would hide the few casts in the isolated region, which are
@@ -228,6 +230,60 @@ def plot_region_trees(study: Study, times: Sequence[int], path: Path, seed: int 
     fig.tight_layout(rect=(0, 0, 0.9, 0.95))
     mappable = plt.cm.ScalarMappable(norm=norm, cmap="magma")
     fig.colorbar(mappable, cax=fig.add_axes((0.92, 0.15, 0.02, 0.7)), label="interest")
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+    return path
+
+
+def _strategy_colour(name: str, teachers: list[str]) -> tuple[tuple[float, ...], str]:
+    """A strategy's colour and hatch: grey alone; a teacher's colour, solid for mimicry and
+    hatched for emulation, so that one teacher's two strategies read as one hue."""
+    kind, _, teacher = name.partition(":")
+    if not teacher:
+        return matplotlib.colors.to_rgba("lightgrey"), ""
+    rgb = matplotlib.colormaps["tab10"](teachers.index(teacher) % 10)
+    return rgb, "" if kind == "mimicry" else "///"
+
+
+def plot_strategy_shares(shares: dict[int, dict[str, float]],
+                         asks: dict[int, dict[str, float]], window: int, runs: int,
+                         path: Path) -> Path:
+    """Two panels over windows of ``window`` movements (keys: a window's first movement):
+    the mean over ``runs`` runs of each strategy's share of the episodes chosen in the window,
+    and the mean number of requests per run sent to each teacher; strategies and teachers
+    stacked in the order the mappings name them."""
+    starts = sorted(set(shares) | set(asks))
+    strategies = list(dict.fromkeys(s for v in shares.values() for s in v))
+    teachers = list(dict.fromkeys([*(s.partition(":")[2] for s in strategies if ":" in s),
+                                   *(t for v in asks.values() for t in v)]))
+    x = np.array(starts, dtype=float) + window / 2
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
+    base = np.zeros(len(starts))
+    for name in strategies:
+        values = np.array([shares.get(s, {}).get(name, 0.0) for s in starts])
+        rgba, hatch = _strategy_colour(name, teachers)
+        top.bar(x, values, width=0.9 * window, bottom=base, color=rgba, hatch=hatch,
+                edgecolor="white" if not hatch else "black", linewidth=0.3, label=name)
+        base += values
+    top.set_ylim(0, 1)
+    top.set_ylabel("share of the episodes chosen")
+    top.set_title(f"SGIM-ACTS's strategies per window of {window} movements "
+                  f"(mean over {runs} runs)")
+    top.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
+    base = np.zeros(len(starts))
+    for teacher in teachers:
+        values = np.array([asks.get(s, {}).get(teacher, 0.0) for s in starts])
+        rgba, _ = _strategy_colour(f"mimicry:{teacher}", teachers)
+        bottom.bar(x, values, width=0.9 * window, bottom=base, color=rgba, edgecolor="white",
+                   linewidth=0.3, label=teacher)
+        base += values
+    bottom.set_ylabel("requests per run")
+    bottom.set_xlabel("movements")
+    bottom.set_title("Whom it asked: requests per teacher (mimicry and emulation)")
+    bottom.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
+    for ax in (top, bottom):
+        ax.grid(alpha=0.3, axis="y")
+    fig.tight_layout()
     fig.savefig(path, dpi=DPI)
     plt.close(fig)
     return path

@@ -9,8 +9,10 @@ The issue's two questions about the learner's choices, answered from its request
 
 Both over the run's last ``window`` movements (the issue: 1000), and ``strategy_shares`` gives
 the choice of strategy per window of movements, for the curves. They read ``Ask`` values:
-``asks_from_runner`` makes them from the runner's records (core/acts_runner.py); the graph's
-HelpRequest records name the teacher and the goal the same way.
+``asks_from_runner`` makes them from the runner's records (core/acts_runner.py) and
+``asks_from_run`` from a graph run's HelpRequest records (analysis/study.py keeps them), which
+name the teacher and the goal the same way; ``strategy_shares`` and ``run_strategy_shares``
+read the episodes' strategies from either.
 """
 
 from __future__ import annotations
@@ -18,10 +20,14 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from sgim_nodes.core.experts import ExpertSpec
+
+if TYPE_CHECKING:
+    from sgim_nodes.analysis.study import RunData
 
 
 @dataclass(frozen=True)
@@ -49,6 +55,13 @@ def asks_from_runner(records: Iterable[Mapping]) -> list[Ask]:
     """The requests of a runner's records (type "request")."""
     return [Ask(int(r["movement"]), str(r["teacher"]), np.asarray(r["goal"], dtype=float))
             for r in records if r.get("type") == "request"]
+
+
+def asks_from_run(run: RunData) -> list[Ask]:
+    """The requests of a graph run: its HelpRequest records (count when asked, teacher, goal);
+    none for a run of another learner or a bag recorded without them."""
+    return [Ask(int(m), str(t), np.asarray(g, dtype=float))
+            for m, t, g in zip(run.ask_index, run.ask_teacher, run.ask_goal, strict=True)]
 
 
 def part_experts(specs: Sequence[ExpertSpec]) -> dict[str, str]:
@@ -83,14 +96,63 @@ def teacher_share(asks: Iterable[Ask], teacher: str) -> Share:
     return Share(sum(a.teacher == teacher for a in asks), len(asks))
 
 
-def strategy_shares(records: Iterable[Mapping], movements: int, window: int
-                    ) -> list[tuple[int, dict[str, float]]]:
+Window = tuple[int, dict[str, float]]
+"""A window of movements (its first movement) and the share of each name in it."""
+
+
+def counts_per_window(events: Iterable[tuple[int, str]], movements: int, window: int
+                      ) -> list[tuple[int, Counter]]:
+    """(movement, name) events counted per window of ``window`` movements (its first
+    movement), windows without an event left out."""
+    by_window: dict[int, Counter] = {}
+    for movement, name in events:
+        by_window.setdefault(int(movement) // window * window, Counter())[str(name)] += 1
+    return [(start, c) for start, c in sorted(by_window.items()) if start < movements]
+
+
+def _shares(counted: list[tuple[int, Counter]]) -> list[Window]:
+    return [(start, {s: n / sum(c.values()) for s, n in sorted(c.items())})
+            for start, c in counted]
+
+
+def strategy_shares(records: Iterable[Mapping], movements: int, window: int) -> list[Window]:
     """Per window of movements (its first movement), the share of each strategy among the
     episodes chosen in it (runner "strategy_choice" records)."""
-    by_window: dict[int, Counter] = {}
-    for r in records:
-        if r.get("type") == "strategy_choice":
-            start = int(r["movement"]) // window * window
-            by_window.setdefault(start, Counter())[str(r["strategy"])] += 1
-    return [(start, {s: n / sum(c.values()) for s, n in sorted(c.items())})
-            for start, c in sorted(by_window.items()) if start < movements]
+    return _shares(counts_per_window(((r["movement"], r["strategy"]) for r in records
+                                      if r.get("type") == "strategy_choice"), movements, window))
+
+
+def run_strategy_shares(run: RunData, window: int) -> list[Window]:
+    """strategy_shares of a graph run: its episodes' strategies, each at the count when its
+    (strategy, goal) was chosen (the Goals that name a strategy)."""
+    return _shares(counts_per_window(zip(run.choice_index, run.choice_strategy, strict=True),
+                                     run.total_movements, window))
+
+
+def mean_shares(per_run: Sequence[list[Window]]) -> dict[int, dict[str, float]]:
+    """Per window, each name's share averaged over the runs that chose anything in it (a run
+    that never chose a name there counts 0 for it): every run weighs the same, however many
+    episodes it had."""
+    found: dict[int, list[dict[str, float]]] = {}
+    for windows in per_run:
+        for start, shares in windows:
+            found.setdefault(start, []).append(shares)
+    names = sorted({n for runs in found.values() for shares in runs for n in shares})
+    return {start: {n: float(np.mean([s.get(n, 0.0) for s in runs])) for n in names}
+            for start, runs in sorted(found.items())}
+
+
+def mean_counts(per_run: Sequence[list[tuple[int, Counter]]]) -> dict[int, dict[str, float]]:
+    """Per window, each name's count averaged over all the runs (0 where a run had none)."""
+    names = sorted({n for windows in per_run for _, c in windows for n in c})
+    starts = sorted({start for windows in per_run for start, _ in windows})
+    totals = {start: Counter() for start in starts}
+    for windows in per_run:
+        for start, c in windows:
+            totals[start].update(c)
+    return {start: {n: totals[start][n] / len(per_run) for n in names} for start in starts}
+
+
+def asks_by_part(asks: Iterable[Ask], part_of: Callable[[np.ndarray], str]) -> Counter:
+    """(part of the world the asked goal lies in, teacher asked) -> requests."""
+    return Counter((part_of(a.goal), a.teacher) for a in asks)

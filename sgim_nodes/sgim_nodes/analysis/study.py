@@ -38,7 +38,7 @@ from sgim_nodes.core.environment import PROCESS_CODES, Status
 from sgim_nodes.provenance import fingerprint
 
 CACHE_NAME = "analysis_cache.npz"
-CACHE_VERSION = 2  # 2: validated records, every segment
+CACHE_VERSION = 3  # 2: validated records, every segment; 3: sources, SGIM-ACTS's choices
 OUTCOME_SIZE = 2
 PROCESS_IMITATION, PROCESS_DEMONSTRATION, PROCESS_EVALUATION = (
     PROCESS_CODES[label] for label in ("imitation", "demonstration", "evaluation"))
@@ -46,7 +46,7 @@ STATUS_OK = int(Status.OK)
 LEARNER_ORDER = ("sgim-d", "saggriac", "random-goals", "demo-only", "random")
 _RUN_NAME = re.compile(r"^(?P<learner>.+)-seed(?P<seed>\d+)$")
 _WANTED = ("movements", "evaluations", "region_map", "demonstrations", "demonstrations_taken",
-           "run_status")
+           "run_status", "help_requests", "goals")
 # Parameters that differ from run to run without changing the experiment: the fingerprint's.
 PER_RUN = fingerprint.PER_RUN | fingerprint.OPERATIONAL
 
@@ -83,6 +83,16 @@ class RunData:
     leaf_lower: np.ndarray  # (R, 2)
     leaf_upper: np.ndarray  # (R, 2)
     leaf_interest: np.ndarray  # (R,)
+    demo_source: np.ndarray = field(default_factory=lambda: np.zeros(0, str))  # (D,)
+    # SGIM-ACTS (issue 33; empty for the others and for bags without these records): its
+    # requests (HelpRequest: count when asked, teacher, what it asked to be shown, goal) and
+    # each episode's strategy (the Goals that name one, with the count when it was chosen).
+    ask_index: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))  # (Q,)
+    ask_teacher: np.ndarray = field(default_factory=lambda: np.zeros(0, str))  # (Q,)
+    ask_content: np.ndarray = field(default_factory=lambda: np.zeros(0, str))  # (Q,)
+    ask_goal: np.ndarray = field(default_factory=lambda: np.zeros((0, OUTCOME_SIZE)))
+    choice_index: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))  # (C,)
+    choice_strategy: np.ndarray = field(default_factory=lambda: np.zeros(0, str))  # (C,)
     budget: int = -1  # RunStatus.total_movements, -1 when never published
     final_state: int = -1  # the last RunStatus.state, -1 when none
     warnings: list[str] = field(default_factory=list)
@@ -188,6 +198,8 @@ def _columns(records: dict[str, list]) -> dict[str, np.ndarray]:
     leaves = [[r for r in maps[k].regions if r.is_leaf] for k in map_keys]
     flat = [r for group in leaves for r in group]
     status = records["run_status"]
+    asks = records.get("help_requests", [])
+    chosen = [g for g in records.get("goals", []) if g.strategy]
     return {
         "movement_index": np.array([m.index for m in moves], dtype=np.int64),
         "process": np.array([m.process for m in moves], dtype=np.uint8),
@@ -199,12 +211,19 @@ def _columns(records: dict[str, list]) -> dict[str, np.ndarray]:
                                dtype=np.int64),
         "demo_outcome": np.array([_point(d.outcome) for d in records["demonstrations"]]
                                  ).reshape(-1, OUTCOME_SIZE),
+        "demo_source": np.array([d.source for d in records["demonstrations"]], dtype=str),
         "map_index": np.array(map_keys, dtype=np.int64),
         "map_offsets": np.concatenate([[0], np.cumsum([len(g) for g in leaves])]
                                       ).astype(np.int64),
         "leaf_lower": np.array([_point(r.lower) for r in flat]).reshape(-1, OUTCOME_SIZE),
         "leaf_upper": np.array([_point(r.upper) for r in flat]).reshape(-1, OUTCOME_SIZE),
         "leaf_interest": np.array([r.interest for r in flat], dtype=float),
+        "ask_index": np.array([a.movement_index for a in asks], dtype=np.int64),
+        "ask_teacher": np.array([a.teacher for a in asks], dtype=str),
+        "ask_content": np.array([a.content for a in asks], dtype=str),
+        "ask_goal": np.array([_point(a.goal) for a in asks]).reshape(-1, OUTCOME_SIZE),
+        "choice_index": np.array([g.movement_index for g in chosen], dtype=np.int64),
+        "choice_strategy": np.array([g.strategy for g in chosen], dtype=str),
         "budget": np.array(max((s.total_movements for s in status), default=-1)),
         "final_state": np.array(status[-1].state if status else -1),
     }

@@ -1,0 +1,146 @@
+"""The active_strategies experiment (issue 33): its pinned file, and its report written into
+the real page from a small synthetic study shaped like the experiment's runs (bags with the
+requests, answers and strategies an SGIM-ACTS run records; no graph run)."""
+
+from __future__ import annotations
+
+import shutil
+import textwrap
+from pathlib import Path
+
+import pytest
+import yaml
+
+from sgim_nodes.experiments import cli, pages, pinned
+from sgim_nodes.experiments.pinned import REPO, pin_of
+from sgim_nodes.experiments.reports import REPORTS, acts_choices
+from sgim_nodes.provenance.fingerprint import data_files
+from sgim_nodes.sweep.sweep_file import spec_fingerprint
+from tests.analysis.synthetic_study import (
+    ACTS_EPISODES,
+    acts_records,
+    demonstrations_at,
+    run_messages,
+    write_run,
+)
+
+GRID = """\
+  grid:
+    - learner: sgim-acts
+    - learner: sgim-d
+      param:
+        teacher_turns: centre,west,rough
+    - learner: [sgim-d, saggriac, demo-only]
+"""
+TURNS = "sgim-d [teacher_turns=centre,west,rough]"
+
+
+def test_the_pinned_experiment_makes_50_runs_and_shares_the_study_s_30():
+    exp = pinned.find("active_strategies")
+    assert exp.maker == "graph" and exp.pages == ("docs/active_strategies.md",)
+    assert exp.report in REPORTS and exp.data_problems() == []
+    assert exp.data == pinned.find("study").data == pinned.find("social_modes").data
+    assert exp.run_timeout == pinned.find("study").run_timeout
+    specs = exp.graph_runs
+    assert len(specs) == 50
+    assert {(s.movements, s.eval_every) for s in specs} == {(5000, 250)}
+    by_arm: dict[tuple, list[int]] = {}
+    for s in specs:
+        by_arm.setdefault((s.learner, s.params), []).append(s.seed)
+    assert by_arm == {arm: list(range(10)) for arm in [
+        ("sgim-acts", ()), ("sgim-d", (("teacher_turns", "centre,west,rough"),)),
+        ("sgim-d", ()), ("saggriac", ()), ("demo-only", ())]}
+    turns = next(s for s in specs if s.params)
+    assert turns.period == 150 and "teacher_turns=centre,west,rough" in turns.argv()
+    mine, study = exp.run_fingerprints(), pinned.find("study").run_fingerprints()
+    shared = {name for name in mine if study.get(name) == mine[name]}
+    assert len(shared) == 30
+    assert {name.rsplit("-seed", 1)[0] for name in shared} == {"sgim-d", "saggriac",
+                                                               "demo-only"}
+
+
+FINALS = {"sgim-acts": [0.10, 0.12, 0.11], TURNS: [0.15, 0.16, 0.18],
+          "sgim-d": [0.20, 0.25, 0.30], "saggriac": [0.40, 0.45, 0.50],
+          "demo-only": [0.30, 0.30, 0.32]}
+DEMONSTRATIONS = {TURNS: [0, 5, 10, 15], "sgim-d": [5, 10, 15], "demo-only": [5, 10, 15, 19]}
+
+
+@pytest.fixture
+def repo(tmp_path, monkeypatch) -> Path:
+    """A repository holding a 20-movement, 3-seed copy of the experiment (P = 5), today's
+    page, and its runs made synthetically with the fingerprints the experiment expects."""
+    (tmp_path / "experiments").mkdir()
+    (tmp_path / "docs").mkdir()
+    shutil.copy(REPO / "docs" / "active_strategies.md", tmp_path / "docs")
+    pins = {n: pin_of(p) for n, p in data_files().items()}
+    (tmp_path / "experiments" / "tiny.yaml").write_text(textwrap.dedent(f"""\
+        name: tiny
+        maker: graph
+        report: active_strategies
+        pages: [docs/active_strategies.md]
+        data: {yaml.safe_dump(pins, default_flow_style=True, width=10**4).strip()}
+        runs:
+          movements: 20
+          eval_every: 10
+          period: 5
+          seeds: 3
+        """) + GRID)
+    for module in (pinned, cli):
+        monkeypatch.setattr(module, "REPO", tmp_path)
+        monkeypatch.setattr(module, "EXPERIMENTS", tmp_path / "experiments")
+    monkeypatch.setattr(cli, "FIGURES", tmp_path / "docs" / "figures")
+    monkeypatch.setenv("SGIM_EXPERIMENT_RUNS", str(tmp_path / "runs"))
+    monkeypatch.setattr(acts_choices, "WINDOW", 10)
+    monkeypatch.setattr(acts_choices, "LAST", 10)
+    runs = tmp_path / "runs" / "tiny"
+    for spec in pinned.find("tiny").graph_runs:
+        group = spec.learner + (" [teacher_turns=centre,west,rough]" if spec.params else "")
+        extra = (acts_records(ACTS_EPISODES) if spec.learner == "sgim-acts"
+                 else demonstrations_at(DEMONSTRATIONS.get(group, [])))
+        inside = {3: 0} if (group, spec.seed) == ("sgim-acts", 0) else {}
+        evals = {0: 0.9, 10: 0.6, 20: FINALS[group][spec.seed]}
+        write_run(runs, spec.learner, spec.seed,
+                  run_messages(spec.learner, spec.seed, evals, inside, extra=extra),
+                  fingerprint=spec_fingerprint(spec).to_dict(), name=spec.name,
+                  parameters={"teacher_turns": "centre,west,rough"} if spec.params else None)
+    return tmp_path
+
+
+def test_the_report_writes_every_block_of_the_page(repo, capsys):
+    assert cli.main(["tiny", "--report-only"]) == 0, capsys.readouterr().err[-3000:]
+    text = (repo / "docs" / "active_strategies.md").read_text()
+    blocks = pages.blocks_of(text)
+    assert all(body.strip() for body in blocks.values()), [n for n, b in blocks.items()
+                                                          if not b.strip()]
+    assert "Issue 33 sets three goals" in text  # the prose around the blocks is kept
+    assert pages.provenance_of(text, "tiny").fingerprint == pinned.find("tiny").fingerprint()
+    comparison = blocks["comparison"]
+    assert comparison.index("**SGIM-ACTS**") < comparison.index(
+        "SGIM-D, centre, west, rough taking turns") < comparison.index("SAGG-RIAC")
+    assert "| **SGIM-ACTS** | 0.110 [" in comparison and "| 2 | 1/3 | 1, 0, 0 | 3 |" in comparison
+    assert sum(line.startswith("| sgim-acts | ") for line in
+               blocks["error-tests"].splitlines()) == 4  # against each other learner
+    # 2 demonstrations taken per run of 7 requests; SGIM-D's arms 4 and 3 per run
+    demos = blocks["demonstrations"]
+    assert "| SGIM-ACTS | 2, 2, 2 | 2.0 [2.0, 2.0] | centre 1.0, west 1.0, rough 0.0 | 7, 7, 7 |" \
+        in demos
+    assert "| 4.0 [4.0, 4.0] | centre 2.0, west 1.0, rough 1.0 |  |" in demos  # turn k: k mod 3
+    assert "a ratio of 0.50" in demos and "a ratio of 0.67" in demos
+    goals = blocks["goals"]
+    rows = {line.split(" | ")[0].lower(): line for line in goals.splitlines() if " | " in line}
+    turns_row = next(v for k, v in rows.items() if "rough taking turns" in k)
+    one_row = next(v for k, v in rows.items() if "one teacher" in k)
+    # 3 seeds: no corrected test can be significant, so SGIM-ACTS is not found worse
+    assert turns_row.endswith("| **met** |") and one_row.endswith("| **not met** |")
+    expert = next(v for k, v in rows.items() if "precise expert" in k)
+    rough = next(v for k, v in rows.items() if "rough's share" in k)
+    assert "pooled 75.0 % (9 of 12)" in expert and expert.endswith("| **met** |")
+    assert "pooled 20.0 % (3 of 15)" in rough and rough.endswith("| **not met** |")
+    assert "| **pooled** | 15 | 12 | 9 | 75.0 % | 3 | 20.0 % |" in blocks["choices"]
+    assert "| basin | centre | 3 | 0 | 3 | 6 | 50.0 % |" in blocks["regions"]
+    assert "| land | none (no precise expert) | 0 | 3 | 0 | 3 |  |" in blocks["regions"]
+    assert "| 0-10 | 50.0 % | 25.0 % | 0.0 % | 0.0 % | 0.0 % | 25.0 % | 1.0 | 0.0 | 1.0 |" \
+        in blocks["strategies"]
+    for figure in ("active_strategies_error_curves.png", "active_strategies_choices.png"):
+        assert (repo / "docs" / "figures" / figure).stat().st_size > 10_000
+    assert cli.main(["--check"]) == 0
