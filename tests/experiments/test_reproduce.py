@@ -84,6 +84,18 @@ def test_check_finds_a_stale_page_and_mark_stale_bannering_it(repo, capsys):
     assert cli.main(["--mark-stale"]) == 0
     assert pages.has_banner(page.read_text(), "pond")
     assert cli.main(["--check"]) == 0
+    # The banner says today's fingerprint: once that changes, --mark-stale says the new one,
+    # in place, and marking again changes nothing.
+    today = pinned.find("pond").fingerprint()
+    page.write_text(page.read_text().replace(today, "0123456789abcdef"))
+    capsys.readouterr()
+    assert cli.main(["--mark-stale"]) == 0
+    assert "docs/pond.md: marked stale" in capsys.readouterr().out
+    marked = page.read_text()
+    assert f"`{today}`" in marked and "0123456789abcdef" not in marked
+    assert marked.count("<!-- stale pond: begin -->") == 1
+    assert cli.main(["--mark-stale"]) == 0 and page.read_text() == marked
+    assert "marked stale" not in capsys.readouterr().out
 
 
 def test_a_change_of_the_runs_makes_the_page_stale(repo, capsys):

@@ -102,12 +102,16 @@ def check(experiments: list[Experiment], mark: bool) -> int:
                         if mark else print(f"{page}: fresh, but it says it is stale "
                                            f"({exp.name}); --mark-stale takes the banner off")
                 continue
-            if pages.has_banner(text, exp.name):
-                continue
-            if mark:
+            if mark:  # a banner says today's fingerprint: written again when that changed
                 banner = pages.banner(exp.name, state.made, expected)
-                path.write_text(pages.with_banner(text, banner), encoding="utf-8")
-                print(f"{page}: marked stale ({exp.name}: the page {state.why()})")
+                marked = (pages.replace_banner(text, banner, exp.name)
+                          if pages.has_banner(text, exp.name)
+                          else pages.with_banner(text, banner))
+                if marked != text:
+                    path.write_text(marked, encoding="utf-8")
+                    print(f"{page}: marked stale ({exp.name}: the page {state.why()})")
+                continue
+            if pages.has_banner(text, exp.name):
                 continue
             print(f"{page}: stale and not marked: {exp.name}'s learner fingerprint is "
                   f"{expected} today; the page {state.why()}. Make it again "

@@ -96,6 +96,11 @@ def remove_banner(text: str, experiment: str) -> str:
     return _STALE.sub(lambda m: "" if m["name"] == experiment else m[0], text)
 
 
+def replace_banner(text: str, block: str, experiment: str) -> str:
+    """The page with its banner of ``experiment`` replaced by ``block``, where it stands."""
+    return _STALE.sub(lambda m: block if m["name"] == experiment else m[0], text)
+
+
 def with_banner(text: str, block: str) -> str:
     """The banner right under the page's title (its first line starting with '# ')."""
     lines = text.splitlines(keepends=True)
