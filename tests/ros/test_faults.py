@@ -38,6 +38,18 @@ def find_process(*parts: str) -> int | None:
     return None
 
 
+def recorded_movements(bag: Path) -> int:
+    """The highest movement a bag's finished parts hold (the open one is skipped)."""
+    from sgim_nodes.bag.reader import read_messages
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            return max((m.index for _, _, m in read_messages(bag, ["movements"])), default=0)
+        except Exception:  # no finished part yet
+            return 0
+
+
 def test_a_killed_simulator_is_restarted_and_no_movement_is_lost_or_doubled(
         ros_processes, ros_domain, tmp_path, rclpy_context):
     from sgim_msgs.msg import Movement
@@ -89,7 +101,6 @@ def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
     never answers turn 100 (its node is replaced by a sleeper; this test gives turn 0's
     word), so the arbiter waits at movement 100, and Ctrl-C comes once the bag holds it."""
     from sgim_msgs.msg import Demonstration, Movement, RunStatus, TeacherCheck
-    from sgim_nodes.bag.reader import read_messages
     from sgim_nodes.bag.resume import load_run_folder, segments
     from sgim_ros import qos
     from sgim_ros.ready import serve_ready
@@ -123,18 +134,8 @@ def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
                                 source="automatic"))  # the teacher's "nothing to show"
     cut = tmp_path / "cut"
 
-    def recorded() -> int:
-        """The highest movement the bag's finished parts hold (the open one is skipped)."""
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            try:
-                return max((m.index for _, _, m in read_messages(cut / "bag", ["movements"])),
-                           default=0)
-            except Exception:  # no finished part yet
-                return 0
-
     deadline = time.monotonic() + 300
-    while recorded() < 100:
+    while recorded_movements(cut / "bag") < 100:
         assert time.monotonic() < deadline and first.poll() is None, "the run did not reach 100"
         client.spin_for(0.5)
     first.send_signal(signal.SIGINT)  # Ctrl-C

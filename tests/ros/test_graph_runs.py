@@ -551,12 +551,11 @@ def test_an_interrupted_sgim_acts_run_resumes_and_goes_on_asking(ros_processes, 
     reaches its budget with every answer naming its own request."""
     import signal
     import time
-    import warnings
 
     import yaml
 
-    from sgim_nodes.bag.reader import read_messages
     from sgim_nodes.bag.resume import load_run_folder, segments
+    from tests.ros.test_faults import recorded_movements
 
     movements, cut = 360, tmp_path / "cut"
     common = ["--domain", str(ros_domain), "--quiet", "--timeout", "600"]
@@ -565,17 +564,8 @@ def test_an_interrupted_sgim_acts_run_resumes_and_goes_on_asking(ros_processes, 
         "--runs-dir", str(tmp_path), "--name", "cut", *common],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
-    def recorded() -> int:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            try:
-                return max((m.index for _, _, m in read_messages(cut / "bag", ["movements"])),
-                           default=0)
-            except Exception:  # no finished part yet
-                return 0
-
     deadline = time.monotonic() + 300
-    while recorded() < 60:
+    while recorded_movements(cut / "bag") < 60:
         assert time.monotonic() < deadline and first.poll() is None, "the run did not reach 60"
         time.sleep(0.3)
     first.send_signal(signal.SIGINT)
