@@ -82,3 +82,9 @@ def test_a_graph_experiment_is_made_reported_and_shares_its_runs(tmp_path, monke
     theirs = tmp_path / "runs" / "tiny" / "sgim-d-P20-seed1" / "metadata.yaml"
     assert mine.stat().st_ino == theirs.stat().st_ino  # linked, not copied
     assert cli.main(["--check"]) == 0
+
+    # A --runs-dir chosen elsewhere takes its runs from the experiments beside it too
+    monkeypatch.setenv("SGIM_EXPERIMENT_RUNS", str(tmp_path / "nowhere"))
+    assert cli.main(["other", "--runs-only", "--runs-dir", str(tmp_path / "runs" / "o2")]) == 0
+    err = capsys.readouterr().err
+    assert "sgim-d-P20-seed1 (" in err and "1 already finished, 0 to do" in err, err

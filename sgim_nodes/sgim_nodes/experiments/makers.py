@@ -51,7 +51,9 @@ def _graph(experiment: Experiment, runs_dir: Path, parallel: int, address: str |
 
     sweep = Sweep(experiment.path, experiment.name, runs_dir.absolute(),
                   experiment.run_timeout, tuple(experiment.graph_runs))
-    linked = link_finished_elsewhere(sweep, runs_root())
+    # Siblings are where experiments' runs go, and beside a --runs-dir chosen elsewhere.
+    roots = list(dict.fromkeys((runs_root().absolute(), runs_dir.absolute().parent)))
+    linked = link_finished_elsewhere(sweep, roots)
     if linked:
         say(f"{len(linked)} run(s) taken from other experiments, made by the same learner: "
             + ", ".join(linked))
@@ -61,15 +63,15 @@ def _graph(experiment: Experiment, runs_dir: Path, parallel: int, address: str |
     return driver.drive(sweep, driver.parse_args(argv))
 
 
-def link_finished_elsewhere(sweep, root: Path) -> list[str]:
+def link_finished_elsewhere(sweep, roots: Sequence[Path]) -> list[str]:
     """Hard-link into the sweep's folder every absent run that a sibling experiment's folder
-    holds finished, with the same name and today's fingerprint for it."""
+    (a folder in one of `roots`) holds finished, with the same name and today's fingerprint."""
     from sgim_nodes.sweep import results
     from sgim_nodes.sweep.results import State
 
     linked = []
-    siblings = [p for p in sorted(root.iterdir()) if p.is_dir() and p != sweep.runs_dir] \
-        if root.is_dir() else []
+    siblings = [p for root in roots if root.is_dir() for p in sorted(root.iterdir())
+                if p.is_dir() and p.absolute() != sweep.runs_dir.absolute()]
     for spec in sweep.runs:
         target = sweep.runs_dir / spec.name
         if target.exists():
