@@ -155,3 +155,6 @@ def test_movements_done_reads_the_arbiters_last_progress_line(tmp_path):
         "[INFO] [1.0] [social_interaction]: 40/100 movements (40 %, 9.0/s)\n" * 50
         + "[INFO] [2.0] [social_interaction]: 87/100 movements (87 %, 9.9/s)\n")
     assert task.movements_done(tmp_path) == 87
+    with (tmp_path / "logs" / "social_interaction.log").open("a") as log:  # SGIM-ACTS's requests
+        log.write("[INFO] [3.0] [social_interaction]: request 9 to west at movement 88\n" * 400)
+    assert task.movements_done(tmp_path) == 87

@@ -82,17 +82,20 @@ def clean_stale(scratch: Path) -> list[str]:
     return removed
 
 
-def movements_done(run_dir: Path) -> int:
-    """The arbiter's last progress line ("N/M movements") in its log."""
+def movements_done(run_dir: Path, window: int = 4096, most: int = 1 << 20) -> int:
+    """The arbiter's last progress line ("N/M movements") in its log. The tail read grows
+    until it holds one: SGIM-ACTS's arbiter writes a line per request between them."""
     try:
         with (run_dir / "logs" / "social_interaction.log").open("rb") as f:
-            f.seek(0, os.SEEK_END)
-            f.seek(max(0, f.tell() - 2000))
-            tail = f.read().decode(errors="replace")
+            size = f.seek(0, os.SEEK_END)
+            while True:
+                f.seek(max(0, size - window))
+                found = PROGRESS.findall(f.read().decode(errors="replace"))
+                if found or window >= min(size, most):
+                    return int(found[-1][0]) if found else 0
+                window *= 4
     except OSError:
         return 0
-    found = PROGRESS.findall(tail)
-    return int(found[-1][0]) if found else 0
 
 
 @cache
