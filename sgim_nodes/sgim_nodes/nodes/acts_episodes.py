@@ -46,8 +46,21 @@ class ActsEpisodes:
         self._asked: dict[int, tuple[str, int]] = {}  # index -> (teacher, movement)
         self._out = arbiter.create_publisher(HelpRequest, "help_requests", qos.RECORDS)
 
-    def receive(self, msg: Demonstration) -> str:
-        """Keep a teacher's answer; '' or why it is not one to a request of this run."""
+    def resume(self, records) -> None:
+        """Requests go on numbering after the recorded ones."""
+        self.requests = max((h.index for h in records.help_requests), default=0)
+
+    def receive(self, msg: Demonstration) -> None:
+        """A teacher's answer, kept; refused (logged, announced) when it is invalid or not
+        one to a request of this run."""
+        node = self.arbiter
+        problem = node.gate.check("demonstrations", msg)
+        why = problem.detail if problem is not None else self._unexpected(msg)
+        if why:
+            node.say_refusal(f"demonstration {msg.index} refused: {why}")
+
+    def _unexpected(self, msg: Demonstration) -> str:
+        """'' or why it is not an answer to a request of this run."""
         index = int(msg.help_request)
         if index not in self._asked:
             return f"it answers help request {index}, which the learner never made"
@@ -62,6 +75,13 @@ class ActsEpisodes:
                     f"but the learner asked at {movement}")
         self.answers[index] = msg
         return ""
+
+    async def after_attempt(self, result: ReachGoal.Result) -> None:
+        """After the explorer's job: the social episode it handed back, if any."""
+        if result.movements_used:
+            self.in_a_row = 0
+        if len(result.social.point):
+            await self.run(result.social, result.social_start_distance)
 
     async def run(self, goal: Goal, start: float) -> None:
         """One social episode toward the chosen ``goal`` (memory's distance ``start``)."""
@@ -79,8 +99,11 @@ class ActsEpisodes:
             return
         self.in_a_row = 0
         node.publish_taken(answer)
-        if kind == "emulation":
-            await node.emulate(goal, start, answer.outcome)
+        if kind == "emulation":  # the explorer reaches the outcome, measured at the goal
+            result = await node.run_job(node.reach, emulation_job(
+                goal, start, answer.outcome, node.cap(), node.count, node.goals_folded),
+                "reach_goal")
+            node.goals_folded += result.goals_attempted
             return
         if len(answer.outcome):  # its cast landed: the memory holds it, as SGIM-D's does
             reply = await node.call(node.register_client,

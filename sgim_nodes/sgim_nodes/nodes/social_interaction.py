@@ -65,7 +65,7 @@ from sgim_nodes.core.help_request import ON_REQUEST
 from sgim_nodes.core.learners import GOAL_BABBLERS
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.core.teaching import GOAL_ONLY, MEANS_ONLY
-from sgim_nodes.nodes.acts_episodes import ActsEpisodes, emulation_job
+from sgim_nodes.nodes.acts_episodes import ActsEpisodes
 from sgim_nodes.nodes.arbiter_jobs import JobSlot, Waits
 from sgim_nodes.nodes.arbiter_params import PARAMS, SOCIAL
 from sgim_nodes.nodes.demonstration_inbox import DemonstrationInbox, shown
@@ -147,7 +147,7 @@ class SocialInteraction(AsyncNode):
             values["action_size"], values["outcome_size"], budget=self.total,
             teaching_set_size=teaching_set_size(values["teaching_set"] or None)))
         self.inbox = DemonstrationInbox(self.gate, self.total, self.automatic, self.asks,
-                                        self._say_refusal)
+                                        self.say_refusal)
         self._competences = self.create_publisher(Competence, "competences", qos.RECORDS)
         self.create_subscription(Demonstration, "demonstrations", self._on_demo, qos.RECORDS)
         self.create_subscription(Evaluation, "evaluations", self._on_evaluation, qos.RECORDS)
@@ -159,9 +159,8 @@ class SocialInteraction(AsyncNode):
     def _resume(self, point) -> None:
         self.count = point.count
         self.goals_folded = point.state.n_competences
-        if self.episodes is not None:  # its requests go on numbering after the recorded ones
-            self.episodes.requests = max((h.index for h in point.records.help_requests),
-                                         default=0)
+        if self.episodes is not None:
+            self.episodes.resume(point.records)
         self.turns_taken = set(point.demonstration_turns)
         self.evaluated = set(point.evaluated)
         if self.asks is not None:
@@ -178,15 +177,8 @@ class SocialInteraction(AsyncNode):
     # --- events -------------------------------------------------------------------------
     def _on_demo(self, msg: Demonstration) -> None:
         if self.acts:  # a teacher's answer to one of its requests
-            problem = self.gate.check("demonstrations", msg)
-            why = problem.detail if problem is not None else self.episodes.receive(msg)
-            if why:
-                self._say_refusal(f"demonstration {msg.index} refused: {why}")
-            self._wake()
-            return
-        if not self.social:
-            return
-        if self.inbox.receive(msg, self.count):
+            self.episodes.receive(msg)
+        elif self.social and self.inbox.receive(msg, self.count):
             self.job.cancel()  # preempt: honoured at the job's next movement boundary
         self._wake()
 
@@ -272,15 +264,11 @@ class SocialInteraction(AsyncNode):
                 await self._take_demonstration(self.inbox.pending.popleft())
                 self._paced()
                 continue
-            cap = self._cap()
-            if self.acts:
-                result = await self._goal_attempt(cap)
-                if result.movements_used:
-                    self.episodes.in_a_row = 0
-                if len(result.social.point):
-                    await self.episodes.run(result.social, result.social_start_distance)
+            cap = self.cap()
+            if self.acts:  # a social goal comes back from the explorer: its episode
+                await self.episodes.after_attempt(await self.goal_attempt(cap))
             elif self.learner in GOAL_BABBLERS:
-                await self._goal_attempt(cap)
+                await self.goal_attempt(cap)
             elif self.learner == "demo-only" and self.latest_demo is not None:
                 await self.imitation(self.latest_demo, cap)
             else:
@@ -288,7 +276,7 @@ class SocialInteraction(AsyncNode):
             self._paced()
             self.progress.moved()
 
-    def _cap(self) -> int:
+    def cap(self) -> int:
         """Movements the next job may make: to the budget, the teacher's next boundary, a
         human's step, or where a stalled learner earns its next ask."""
         cap = self.total - self.count
@@ -333,7 +321,7 @@ class SocialInteraction(AsyncNode):
             return
         if demo.content == GOAL_ONLY:  # emulation: the outcome becomes the next goal
             self.publish_taken(demo)
-            await self._goal_attempt(self._cap(), demonstrated=demo.outcome)
+            await self.goal_attempt(self.cap(), demonstrated=demo.outcome)
             return
         if demo.content == MEANS_ONLY:  # the action, imitated; where it lands, seen by itself
             self.publish_taken(demo)
@@ -366,10 +354,10 @@ class SocialInteraction(AsyncNode):
                 competence=comp, movements_used=result.movements_used,
                 from_demonstration=True))
 
-    async def _goal_attempt(self, cap: int, demonstrated=()) -> ReachGoal.Result:
+    async def goal_attempt(self, cap: int, demonstrated=()) -> ReachGoal.Result:
         """Goals drawn by the goal generator and reached by the explorer, up to `cap`
         movements and goals_per_job goals; or the `demonstrated` outcome adopted, alone."""
-        result = await self._action(self.reach, ReachGoal.Goal(
+        result = await self.run_job(self.reach, ReachGoal.Goal(
             max_movements=cap, max_goals=self.goals_per_job, movements_before=self.count,
             goals_before=self.goals_folded, demonstrated=list(demonstrated)), "reach_goal")
         self.goals_folded += result.goals_attempted
@@ -378,13 +366,6 @@ class SocialInteraction(AsyncNode):
                                     result.competence, result.finished, self.count)
         return result
 
-    async def emulate(self, goal, start: float, outcome) -> None:
-        """SGIM-ACTS's emulation: the explorer reaches the teacher's outcome, and measures
-        the episode at the chosen goal."""
-        result = await self._action(self.reach, emulation_job(
-            goal, start, outcome, self._cap(), self.count, self.goals_folded), "reach_goal")
-        self.goals_folded += result.goals_attempted
-
     def publish_competence(self, msg: Competence) -> None:
         """A competence folded by the arbiter (an imitated demonstration, a social episode)."""
         self._competences.publish(msg)
@@ -392,11 +373,11 @@ class SocialInteraction(AsyncNode):
 
     async def imitation(self, demo: Demonstration, repetitions: int,
                         measure_at=()) -> Imitate.Result:
-        return await self._action(self.imitate, Imitate.Goal(
+        return await self.run_job(self.imitate, Imitate.Goal(
             action=demo.action, outcome=demo.outcome, repetitions=repetitions,
             movements_before=self.count, measure_at=list(measure_at)), "imitate")
 
-    async def _action(self, client: ActionClient, goal, name: str):
+    async def run_job(self, client: ActionClient, goal, name: str):
         held = self.inbox.pending or (self.pace is not None and self.pace.paused)
         # Feedback counts from the job's start: one that arrives after the result (a topic
         # and a service answer keep no order between them) is then behind, never ahead.
@@ -423,7 +404,7 @@ class SocialInteraction(AsyncNode):
             teaching_set_index=demo.teaching_set_index, source=demo.source,
             content=demo.content, help_request=demo.help_request))
 
-    def _say_refusal(self, line: str) -> None:
+    def say_refusal(self, line: str) -> None:
         self.get_logger().warning(line)
         self.progress.say(RunStatus.STATE_RUNNING, line)
 
