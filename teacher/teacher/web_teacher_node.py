@@ -11,8 +11,8 @@ and pause, resume or step the run. The decisions are the terminal teacher's
 Threads: the HTTP server answers in its own threads, reading the picture under one lock;
 whatever touches ROS (publishing, service calls) is queued to the main thread, which spins
 the node (a 50 Hz timer takes the queue) and answers each queued command when it is done.
-The cast of the latest demonstration is drawn by `render_cast` in a low-priority child
-process, so the run is not slowed.
+The cast of the latest demonstration is drawn in a low-priority child process, so the run is
+not slowed (web/cast_pictures.py).
 
 After the run: with `linger` > 0 and a page open (it asked for the state in the last 90 s),
 the page keeps being served, saying the run is over, until the person closes it there or
@@ -30,14 +30,8 @@ execute_timeout, render_casts, linger (see PARAMS).
 
 from __future__ import annotations
 
-import contextlib
-import io
 import math
-import os
 import queue
-import subprocess
-import sys
-import tempfile
 import time
 import zipfile
 from concurrent.futures import Future as ThreadFuture
@@ -57,10 +51,8 @@ from sgim_ros import qos
 from sgim_ros.entry import run_node
 from sgim_ros.params import Param, ParameterError, declare, non_negative, positive
 from sgim_ros.ready import serve_ready
-from sim_bridge import scaling
 from sim_bridge.data_files import load_teaching_set
 from sim_bridge.data_params import TEACHING_SET_FILE
-from sim_bridge.lake import is_water
 from teacher.human_commands import CommandError, NoneThere, PaceRequest
 from teacher.human_decisions import (
     ExecuteFirst,
@@ -69,7 +61,8 @@ from teacher.human_decisions import (
     TeachingLibrary,
     executed_demonstration,
 )
-from teacher.web.app import LAND_RGB, WATER_RGB, WebTeacher
+from teacher.web.app import WebTeacher
+from teacher.web.cast_pictures import CastRenderer, lake_png
 from teacher.web.server import Api, Refused, serve
 from teacher.web_expert import WEB_EXPERT, WebExpert
 
@@ -134,11 +127,7 @@ class WebTeacherNode(Node, Api):
         self._execute = self.create_client(ExecuteAction, "execute_action")
         self._pace = self.create_client(Pace, "pace")
         self._lake = lake_png()
-        self._render_casts = p["render_casts"]
-        self._cast_dir = Path(tempfile.mkdtemp(prefix="web_teacher_cast_"))
-        self._cast_bytes: bytes | None = None
-        self._render: tuple[subprocess.Popen, Path, str] | None = None
-        self._render_next: tuple[np.ndarray, str] | None = None
+        self.casts = CastRenderer(p["render_casts"], self.get_logger().warning)
         try:
             self.server = serve(p["host"], p["port"], p["token"], self)
         except Refused as error:
@@ -230,7 +219,7 @@ class WebTeacherNode(Node, Api):
         return self.app.legend()
 
     def image(self, name: str) -> bytes | None:
-        return self._lake if name == "lake.png" else self._cast_bytes
+        return self._lake if name == "lake.png" else self.casts.picture
 
     def command(self, body: Any) -> dict[str, Any]:
         return self.app.command(body, self._carry_out)
@@ -353,7 +342,7 @@ class WebTeacherNode(Node, Api):
         if msg is not None:
             text += f" ({self.expert.describe(msg)})"
         self.app.say(text, "sent")
-        self._queue_render(demo.action, f"demonstration {number}: {demo.text}")
+        self.casts.queue(demo.action, f"demonstration {number}: {demo.text}")
         return {"ok": True, "message": text, "demonstration": number, "movement": at}
 
     def _none_there(self) -> dict[str, Any]:
@@ -366,70 +355,22 @@ class WebTeacherNode(Node, Api):
         self.app.say(text, "sent")
         return {"ok": True, "message": text}
 
-    # --- the cast picture ---------------------------------------------------------------------
-
-    def _queue_render(self, action: np.ndarray, caption: str) -> None:
-        if self._render_casts:
-            self._render_next = (np.asarray(action, dtype=float), caption)
-
     def _poll_render(self) -> None:
-        if self._render is not None:
-            child, gif, caption = self._render
-            if child.poll() is None:
-                return
-            self._render = None
+        finished, busy = self.casts.poll()
+        if finished is not None or busy != self.app.cast["rendering"]:
             with self.app.lock:
-                self.app.cast["rendering"] = False
-            if child.returncode == 0 and gif.is_file():
-                self._cast_bytes = gif.read_bytes()
-                with self.app.lock:
+                self.app.cast["rendering"] = busy
+                if finished is not None:
                     self.app.cast["version"] += 1
-                    self.app.cast["caption"] = caption
-            else:
-                self.get_logger().warning(f"render_cast failed (exit {child.returncode})")
-        if self._render_next is not None:
-            action, caption = self._render_next
-            self._render_next = None
-            action_file = self._cast_dir / "action.yaml"
-            action_file.write_text(str([float(v) for v in action]))
-            gif = self._cast_dir / "cast.gif"
-            gif.unlink(missing_ok=True)
-            command = [sys.executable, "-m", "sim_bridge.tools.render_cast", "--action",
-                       str(action_file), "--out", str(gif), "--size", "240x180", "--fps", "20",
-                       "--quiet"]
-            self._render = (subprocess.Popen(command, stdout=subprocess.DEVNULL,
-                                             stderr=subprocess.DEVNULL,
-                                             preexec_fn=lambda: os.nice(10)), gif, caption)
-            with self.app.lock:
-                self.app.cast["rendering"] = True
+                    self.app.cast["caption"] = finished
 
     def destroy_node(self) -> None:
         self.server.stop()
         for file in (self.address_file, self.linger_file):  # it serves no more
             if file is not None:
                 file.unlink(missing_ok=True)
-        if self._render is not None and self._render[0].poll() is None:
-            self._render[0].kill()
-            self._render[0].wait(timeout=5)
-        for file in self._cast_dir.glob("*"):
-            file.unlink(missing_ok=True)
-        with contextlib.suppress(OSError):
-            self._cast_dir.rmdir()
+        self.casts.stop()
         super().destroy_node()
-
-
-def lake_png(size: int = 240) -> bytes:
-    """The water (blue) and land (sand) of the outcome space [-1, 1]^2, y up, as a PNG."""
-    from PIL import Image
-
-    u = (np.arange(size) + 0.5) / size * 2.0 - 1.0
-    ux, uy = np.meshgrid(u, -u)  # row 0 is y = +1
-    water = is_water(scaling.outcome_to_world(np.column_stack([ux.ravel(), uy.ravel()])))
-    rgb = np.where(water.reshape(size, size, 1), np.array(WATER_RGB, np.uint8),
-                   np.array(LAND_RGB, np.uint8)).astype(np.uint8)
-    buffer = io.BytesIO()
-    Image.fromarray(rgb, "RGB").save(buffer, format="PNG", optimize=True)
-    return buffer.getvalue()
 
 
 def main(args: list[str] | None = None) -> int:
