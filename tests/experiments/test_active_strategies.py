@@ -9,12 +9,10 @@ import textwrap
 from pathlib import Path
 
 import pytest
-import yaml
 
 from sgim_nodes.experiments import cli, pages, pinned
-from sgim_nodes.experiments.pinned import REPO, pin_of
+from sgim_nodes.experiments.pinned import REPO
 from sgim_nodes.experiments.reports import REPORTS, acts_choices
-from sgim_nodes.provenance.fingerprint import data_files
 from sgim_nodes.sweep.sweep_file import spec_fingerprint
 from tests.analysis.synthetic_study import (
     ACTS_EPISODES,
@@ -66,30 +64,22 @@ DEMONSTRATIONS = {TURNS: [0, 5, 10, 15], "sgim-d": [5, 10, 15], "demo-only": [5,
 
 
 @pytest.fixture
-def repo(tmp_path, monkeypatch) -> Path:
+def repo(scratch_repo, monkeypatch) -> Path:
     """A repository holding a 20-movement, 3-seed copy of the experiment (P = 5), today's
     page, and its runs made synthetically with the fingerprints the experiment expects."""
-    (tmp_path / "experiments").mkdir()
-    (tmp_path / "docs").mkdir()
+    tmp_path = scratch_repo.root
     shutil.copy(REPO / "docs" / "active_strategies.md", tmp_path / "docs")
-    pins = {n: pin_of(p) for n, p in data_files().items()}
-    (tmp_path / "experiments" / "tiny.yaml").write_text(textwrap.dedent(f"""\
+    scratch_repo.experiment("tiny", textwrap.dedent("""\
         name: tiny
         maker: graph
         report: active_strategies
         pages: [docs/active_strategies.md]
-        data: {yaml.safe_dump(pins, default_flow_style=True, width=10**4).strip()}
         runs:
           movements: 20
           eval_every: 10
           period: 5
           seeds: 3
         """) + GRID)
-    for module in (pinned, cli):
-        monkeypatch.setattr(module, "REPO", tmp_path)
-        monkeypatch.setattr(module, "EXPERIMENTS", tmp_path / "experiments")
-    monkeypatch.setattr(cli, "FIGURES", tmp_path / "docs" / "figures")
-    monkeypatch.setenv("SGIM_EXPERIMENT_RUNS", str(tmp_path / "runs"))
     monkeypatch.setattr(acts_choices, "WINDOW", 10)
     monkeypatch.setattr(acts_choices, "LAST", 10)
     runs = tmp_path / "runs" / "tiny"

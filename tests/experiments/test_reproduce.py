@@ -3,11 +3,9 @@ blocks written with their provenance, stale pages found and marked, data pins en
 
 from __future__ import annotations
 
-import textwrap
 from pathlib import Path
 
 import pytest
-import yaml
 
 from sgim_nodes.experiments import cli, pages, pinned, world_jobs
 from sgim_nodes.experiments.pinned import pin_of
@@ -29,30 +27,21 @@ Prose about the pond.
 
 
 @pytest.fixture
-def repo(tmp_path, monkeypatch) -> Path:
+def repo(scratch_repo) -> Path:
     """A repository of one experiment (20 random casts in two chunks) and its page."""
-    (tmp_path / "experiments").mkdir()
-    (tmp_path / "docs").mkdir()
-    (tmp_path / "docs" / "pond.md").write_text(PAGE)
-    pins = {name: pin_of(path) for name, path in data_files().items()}
-    (tmp_path / "experiments" / "pond.yaml").write_text(textwrap.dedent(f"""\
+    scratch_repo.page("docs/pond.md", PAGE)
+    scratch_repo.experiment("pond", """\
         # twenty casts
         name: pond
         maker: world
         report: isolated_region
         pages: [docs/pond.md]
-        data: {yaml.safe_dump(pins, default_flow_style=True, width=10**4).strip()}
         runs:
           casts: 20
           chunk: 10
           seed: 3
-        """))
-    for module in (pinned, cli):
-        monkeypatch.setattr(module, "REPO", tmp_path)
-        monkeypatch.setattr(module, "EXPERIMENTS", tmp_path / "experiments")
-    monkeypatch.setattr(cli, "FIGURES", tmp_path / "docs" / "figures")
-    monkeypatch.setenv("SGIM_EXPERIMENT_RUNS", str(tmp_path / "runs"))
-    return tmp_path
+        """)
+    return scratch_repo.root
 
 
 @pytest.mark.slow

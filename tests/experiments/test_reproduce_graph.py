@@ -4,15 +4,10 @@ made with the same learner taken rather than made again."""
 
 from __future__ import annotations
 
-import textwrap
-
 import pytest
-import yaml
 
 from sgim_nodes.experiments import cli, pages, pinned
-from sgim_nodes.experiments.pinned import pin_of
 from sgim_nodes.experiments.reports.study import own_runs  # noqa: F401  (imported: it loads)
-from sgim_nodes.provenance.fingerprint import data_files
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
@@ -26,39 +21,31 @@ def page(title: str, names) -> str:
 
 
 def experiment(name: str, pages_: list[str], learners: list[str], seeds: list[int]) -> str:
-    pins = {n: pin_of(p) for n, p in data_files().items()}
-    return textwrap.dedent(f"""\
+    return f"""\
         name: {name}
         maker: graph
         report: study
         pages: {pages_}
-        data: {yaml.safe_dump(pins, default_flow_style=True, width=10**4).strip()}
         runs:
           movements: 40
           eval_every: 20
           period: 20
           seeds: {seeds}
           learner: {learners}
-        """)
+        """
 
 
-def test_a_graph_experiment_is_made_reported_and_shares_its_runs(tmp_path, monkeypatch,
+def test_a_graph_experiment_is_made_reported_and_shares_its_runs(scratch_repo, monkeypatch,
                                                                   capsys):
-    (tmp_path / "experiments").mkdir()
-    (tmp_path / "docs").mkdir()
-    (tmp_path / "docs" / "results.md").write_text(page("Results", STUDY_BLOCKS))
-    (tmp_path / "README.md").write_text(page("Readme", ("provenance", "summary")))
-    (tmp_path / "docs" / "other.md").write_text(page("Other", STUDY_BLOCKS))
-    (tmp_path / "docs" / "other_readme.md").write_text(page("Other", ("provenance", "summary")))
-    (tmp_path / "experiments" / "tiny.yaml").write_text(experiment(
+    tmp_path = scratch_repo.root
+    scratch_repo.page("docs/results.md", page("Results", STUDY_BLOCKS))
+    scratch_repo.page("README.md", page("Readme", ("provenance", "summary")))
+    scratch_repo.page("docs/other.md", page("Other", STUDY_BLOCKS))
+    scratch_repo.page("docs/other_readme.md", page("Other", ("provenance", "summary")))
+    scratch_repo.experiment("tiny", experiment(
         "tiny", ["docs/results.md", "README.md"], ["sgim-d", "random"], [0, 1]))
-    (tmp_path / "experiments" / "other.yaml").write_text(experiment(
+    scratch_repo.experiment("other", experiment(
         "other", ["docs/other.md", "docs/other_readme.md"], ["sgim-d"], [1]))
-    for module in (pinned, cli):
-        monkeypatch.setattr(module, "REPO", tmp_path)
-        monkeypatch.setattr(module, "EXPERIMENTS", tmp_path / "experiments")
-    monkeypatch.setattr(cli, "FIGURES", tmp_path / "docs" / "figures")
-    monkeypatch.setenv("SGIM_EXPERIMENT_RUNS", str(tmp_path / "runs"))
 
     assert cli.main(["tiny", "--parallel", "2"]) == 0, capsys.readouterr().err[-3000:]
     results = (tmp_path / "docs" / "results.md").read_text()
