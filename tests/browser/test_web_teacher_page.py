@@ -97,6 +97,10 @@ def message(page) -> str:
     return page.locator("#message").inner_text()
 
 
+def refusals(page) -> int:
+    return sum(line.startswith("refused") for line in page.locator("#log li").all_inner_texts())
+
+
 def wait_for_message(page, pattern: str, timeout: float = 30.0) -> str:
     from playwright.sync_api import TimeoutError as PageTimeout
 
@@ -235,11 +239,14 @@ def test_step_then_a_double_click_demonstrates_once(web_run):
     assert goals, "no unreached teaching goal to click"
     goal = goals[len(goals) // 2]
     at = page.evaluate(f"window.teacherPage.teachingPixel({goal})")
+    refused_before = refusals(page)
     page.locator("#overlay").dblclick(position={"x": at["x"], "y": at["y"]})
     sent = wait_for_message(page, "sent demonstration 1")
     assert f"teaching-set entry {goal}" in sent
     page.wait_for_function("document.querySelector('#pace-state').textContent === 'paused'",
                            timeout=60_000)
+    # The double click's second click was ignored by the page, not refused by the node.
+    assert refusals(page) == refused_before
     # Another one now, with a key of its own, would cut the imitation short: refused.
     auth = f"{{'X-Teacher-Token': {TOKEN!r}, 'X-Teacher': '1'}}"
     reply = fetch(page, "/api/command",

@@ -494,7 +494,9 @@
   }
 
   $("overlay").addEventListener("click", async (event) => {
-    if (view.busy) return;  // the answer to the last click is not in yet
+    // The answer to the last click is not in yet; or this is a double click's second click
+    // (event.detail counts them), which a fast answer would otherwise let through.
+    if (view.busy || event.detail > 1) return;
     const [x, y] = clickedPoint(event);
     const near = goalsNear(x, y);
     if (near.length === 1 && !view.teaching.reached[near[0]]) {
