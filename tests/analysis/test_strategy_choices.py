@@ -116,22 +116,44 @@ def test_a_graph_run_s_requests_and_strategies_are_read_from_its_bag(tmp_path):
 
 def test_the_cache_keeps_the_requests_and_an_older_cache_is_read_again(tmp_path, monkeypatch):
     from sgim_nodes.analysis import study as study_module
-    from sgim_nodes.analysis.study import CACHE_NAME, bag_fingerprint, load_run_data
+    from sgim_nodes.analysis.study import CACHE_NAME, CACHE_VERSION, bag_fingerprint, load_run_data
 
     run_dir, first = _acts_run(tmp_path)
     monkeypatch.setattr(study_module, "_read_run", lambda run_dir: 1 / 0)  # cached: not read
     second = load_run_data(run_dir)
     for name in ("ask_index", "ask_teacher", "ask_content", "ask_goal", "choice_index",
-                 "choice_strategy", "demo_source"):
+                 "choice_strategy", "choice_mode", "demo_source"):
         np.testing.assert_array_equal(getattr(first, name), getattr(second, name))
     monkeypatch.undo()
-    # A cache of the format before these columns: its key names version 2, so it is not used.
+    # A cache of an older format, without these columns: its key names its version, so it
+    # is not used.
     with np.load(run_dir / CACHE_NAME) as data:
         old = {k: data[k] for k in data.files
                if not k.startswith(("ask_", "choice_", "demo_source"))}
-    old["fingerprint"] = np.array(bag_fingerprint(run_dir).replace("v3|", "v2|", 1))
+    old["fingerprint"] = np.array(bag_fingerprint(run_dir).replace(
+        f"v{CACHE_VERSION}|", f"v{CACHE_VERSION - 1}|", 1))
     np.savez_compressed(run_dir / CACHE_NAME, **old)
     assert load_run_data(run_dir).ask_index.tolist() == first.ask_index.tolist()
+
+
+def test_each_request_takes_the_mode_of_its_episode_s_choice():
+    from types import SimpleNamespace
+
+    from sgim_nodes.analysis.strategy_choices import asks_from_run, by_mode
+
+    # Two "none there" mimicry requests to west at count 7 (no movement between them), then
+    # an emulation request to centre at count 9 whose choice was not recorded.
+    run = SimpleNamespace(
+        choice_index=np.array([5, 7, 7, 7]),
+        choice_strategy=np.array(["autonomous", "mimicry:west", "autonomous", "mimicry:west"]),
+        choice_mode=np.array([1, 2, 3, 3], dtype=np.uint8),
+        ask_index=np.array([7, 7, 9]), ask_teacher=np.array(["west", "west", "centre"]),
+        ask_content=np.array(["means-and-goal", "means-and-goal", "goal-only"]),
+        ask_goal=np.zeros((3, 2)))
+    asks = asks_from_run(run)
+    assert [a.mode for a in asks] == [2, 3, 0]
+    groups = by_mode(asks)
+    assert [len(groups[k]) for k in groups] == [1, 1, 3]
 
 
 def test_a_run_without_requests_has_none(study):

@@ -127,6 +127,9 @@ def test_the_report_writes_every_block_of_the_page(repo, capsys):
     assert "pooled 75.0 % (9 of 12)" in expert and expert.endswith("| **met** |")
     assert "pooled 20.0 % (3 of 15)" in rough and rough.endswith("| **not met** |")
     assert "| **pooled** | 15 | 12 | 9 | 75.0 % | 3 | 20.0 % |" in blocks["choices"]
+    modes = blocks["choice-modes"]  # the synthetic episodes are all chosen in mode 1
+    assert "| by interest (modes 1 and 3) | 15 |" in modes and "| all | 15 |" in modes
+    assert "| at random (mode 2) | 0 | n/a |" in modes and "matched no" not in modes
     assert "| basin | centre | 3 | 0 | 3 | 6 | 50.0 % |" in blocks["regions"]
     assert "| land | none (no precise expert) | 0 | 3 | 0 | 3 |  |" in blocks["regions"]
     assert "| 0-10 | 50.0 % | 25.0 % | 0.0 % | 0.0 % | 0.0 % | 25.0 % | 1.0 | 0.0 | 1.0 |" \

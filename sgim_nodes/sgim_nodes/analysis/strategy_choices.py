@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from sgim_nodes.core.experts import ExpertSpec
+from sgim_nodes.core.teaching import GOAL_ONLY
 
 if TYPE_CHECKING:
     from sgim_nodes.analysis.study import RunData
@@ -32,11 +33,13 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class Ask:
-    """One request: when (the learner's movement count), whom, about which goal."""
+    """One request: when (the learner's movement count), whom, about which goal, and the goal
+    mode that chose its (strategy, goal) (1 and 3: by interest, 2: at random; 0: unknown)."""
 
     movement: int
     teacher: str
     goal: np.ndarray
+    mode: int = 0
 
 
 @dataclass(frozen=True)
@@ -59,9 +62,30 @@ def asks_from_runner(records: Iterable[Mapping]) -> list[Ask]:
 
 def asks_from_run(run: RunData) -> list[Ask]:
     """The requests of a graph run: its HelpRequest records (count when asked, teacher, goal);
-    none for a run of another learner or a bag recorded without them."""
-    return [Ask(int(m), str(t), np.asarray(g, dtype=float))
-            for m, t, g in zip(run.ask_index, run.ask_teacher, run.ask_goal, strict=True)]
+    none for a run of another learner or a bag recorded without them. Each takes its mode
+    from the episode's choice: the k-th request of a strategy at a count is the k-th choice of
+    that strategy at that count (a request asks at the count its goal was chosen)."""
+    modes: dict[tuple[int, str], list[int]] = {}
+    for m, strategy, mode in zip(run.choice_index, run.choice_strategy, run.choice_mode,
+                                 strict=True):
+        modes.setdefault((int(m), str(strategy)), []).append(int(mode))
+    asks = []
+    for m, t, content, g in zip(run.ask_index, run.ask_teacher, run.ask_content, run.ask_goal,
+                                strict=True):
+        kind = "emulation" if content == GOAL_ONLY else "mimicry"
+        found = modes.get((int(m), f"{kind}:{t}"))
+        asks.append(Ask(int(m), str(t), np.asarray(g, dtype=float),
+                        found.pop(0) if found else 0))
+    return asks
+
+
+def by_mode(asks: Iterable[Ask]) -> dict[str, list[Ask]]:
+    """The asks whose (strategy, goal) was chosen by interest (modes 1 and 3), at random
+    (mode 2), and all of them."""
+    asks = list(asks)
+    return {"by interest (modes 1 and 3)": [a for a in asks if a.mode in (1, 3)],
+            "at random (mode 2)": [a for a in asks if a.mode == 2],
+            "all": asks}
 
 
 def part_experts(specs: Sequence[ExpertSpec]) -> dict[str, str]:

@@ -38,7 +38,8 @@ from sgim_nodes.core.environment import PROCESS_CODES, Status
 from sgim_nodes.provenance import fingerprint
 
 CACHE_NAME = "analysis_cache.npz"
-CACHE_VERSION = 3  # 2: validated records, every segment; 3: sources, SGIM-ACTS's choices
+CACHE_VERSION = 4  # 2: validated records, every segment; 3: sources, SGIM-ACTS's choices;
+# 4: the goal mode of each SGIM-ACTS choice
 OUTCOME_SIZE = 2
 PROCESS_IMITATION, PROCESS_DEMONSTRATION, PROCESS_EVALUATION = (
     PROCESS_CODES[label] for label in ("imitation", "demonstration", "evaluation"))
@@ -93,6 +94,7 @@ class RunData:
     ask_goal: np.ndarray = field(default_factory=lambda: np.zeros((0, OUTCOME_SIZE)))
     choice_index: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))  # (C,)
     choice_strategy: np.ndarray = field(default_factory=lambda: np.zeros(0, str))  # (C,)
+    choice_mode: np.ndarray = field(default_factory=lambda: np.zeros(0, np.uint8))  # (C,)
     budget: int = -1  # RunStatus.total_movements, -1 when never published
     final_state: int = -1  # the last RunStatus.state, -1 when none
     warnings: list[str] = field(default_factory=list)
@@ -224,6 +226,7 @@ def _columns(records: dict[str, list]) -> dict[str, np.ndarray]:
         "ask_goal": np.array([_point(a.goal) for a in asks]).reshape(-1, OUTCOME_SIZE),
         "choice_index": np.array([g.movement_index for g in chosen], dtype=np.int64),
         "choice_strategy": np.array([g.strategy for g in chosen], dtype=str),
+        "choice_mode": np.array([g.mode for g in chosen], dtype=np.uint8),
         "budget": np.array(max((s.total_movements for s in status), default=-1)),
         "final_state": np.array(status[-1].state if status else -1),
     }

@@ -23,6 +23,7 @@ from sgim_nodes.analysis.strategy_choices import (
     Share,
     asks_by_part,
     asks_from_run,
+    by_mode,
     counts_per_window,
     expert_share,
     in_window,
@@ -149,6 +150,31 @@ def regions_table(runs: Sequence[RunData], last: int) -> str:
                             "all", "sent to its expert"], rows)) + (
         f"\nRequests made in the last {last} movements of each run, pooled over the "
         f"{len(runs)} runs; the part is where the asked goal lies (sim_bridge.lake).")
+
+
+def modes_table(runs: Sequence[RunData], last: int) -> str:
+    """The requests of the last movements by how their (strategy, goal) was chosen: what the
+    learner's interest chose, apart from mode 2's uniform draws of strategy and goal."""
+    part_of = _part_of()
+    groups: dict[str, list[Ask]] = {}
+    for run in runs:
+        for name, asks in by_mode(last_asks(run, last)).items():
+            groups.setdefault(name, []).extend(asks)
+    rows = []
+    for name, asks in groups.items():
+        land = Share(sum(part_of(a.goal) == "land" for a in asks), len(asks))
+        expert = expert_share(asks, FISHING_EXPERTS, part_of)
+        rough = teacher_share(asks, ROUGH)
+        rows.append([name, str(len(asks)), percent(land.value),
+                     f"{percent(expert.value)} ({expert.hits} of {expert.total})",
+                     f"{percent(rough.value)} ({rough.hits} of {rough.total})"])
+    unmatched = sum(a.mode == 0 for a in groups.get("all", []))
+    return "\n".join(table(["requests chosen", f"requests (last {last} movements)",
+                            "about a goal on land", "expert share", "rough's share"], rows)) + (
+        f"\nPooled over the {len(runs)} runs. Mode 2 draws the strategy uniformly and the goal "
+        "uniformly in the whole outcome box (strategy_choice.py); modes 1 and 3 draw the "
+        "(strategy, region) pair by its interest divided by its cost."
+        + (f" {unmatched} requests matched no recorded choice." if unmatched else ""))
 
 
 @dataclass(frozen=True)
