@@ -51,6 +51,7 @@ def test_banner_goes_under_the_title_and_comes_off_when_fresh(tmp_path):
     assert f"come from commit {pages.provenance_of(text, 'x').commit} " in marked
     assert "`ros_ws/reproduce.sh x`" in marked and pages.has_banner(marked, "x")
     assert not pages.has_banner(marked, "other")
+    assert pages.remove_banner(marked, "x") == text  # as before, no blank line left over
     path = tmp_path / "page.md"
     path.write_text(marked)
     pages.write_page(path, {"provenance": made("b" * 16)}, "x")

@@ -93,7 +93,13 @@ def has_banner(text: str, experiment: str) -> bool:
 
 
 def remove_banner(text: str, experiment: str) -> str:
-    return _STALE.sub(lambda m: "" if m["name"] == experiment else m[0], text)
+    """The page without its banner of ``experiment``, and without the blank line that
+    with_banner put after it: the page as it was before it was marked."""
+    out = text
+    for m in reversed([m for m in _STALE.finditer(text) if m["name"] == experiment]):
+        end = m.end() + (text[m.end():m.end() + 1] == "\n")
+        out = out[:m.start()] + out[end:]
+    return out
 
 
 def replace_banner(text: str, block: str, experiment: str) -> str:
