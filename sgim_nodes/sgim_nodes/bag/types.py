@@ -11,9 +11,10 @@ from __future__ import annotations
 import contextlib
 from functools import cache
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from rosbags.typesys import Stores, get_types_from_msg, get_typestore
-from rosbags.typesys.store import Typestore
+if TYPE_CHECKING:  # rosbags is imported when a typestore is made (bag/reader.py says why)
+    from rosbags.typesys.store import Typestore
 
 PACKAGE = "sgim_msgs"
 SOURCE_MSG_DIR = Path(__file__).resolve().parents[3] / PACKAGE / "msg"
@@ -76,6 +77,8 @@ def msg_dir() -> Path:
 
 def sgim_types(directory: Path | None = None) -> dict:
     """Parsed definitions of every sgim_msgs message, keyed by full type name."""
+    from rosbags.typesys import get_types_from_msg
+
     directory = directory or msg_dir()
     types: dict = {}
     for path in sorted(directory.glob("*.msg")):
@@ -89,6 +92,8 @@ def typestore() -> Typestore:
     """The Jazzy typestore plus every sgim_msgs type (registered at once, so nested types
     such as RegionMap's Region resolve whatever the file order). Shared: do not register
     conflicting definitions into it."""
+    from rosbags.typesys import Stores, get_typestore
+
     store = get_typestore(Stores.ROS2_JAZZY)
     store.register(sgim_types())
     return store

@@ -20,13 +20,14 @@ import contextlib
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-
-from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.typesys.store import Typestore
+from typing import TYPE_CHECKING
 
 from sgim_nodes.bag.types import typestore as sgim_typestore
 
-STORAGES = {"mcap": StoragePlugin.MCAP, "sqlite3": StoragePlugin.SQLITE3}
+if TYPE_CHECKING:  # rosbags is imported when a bag is opened (bag/reader.py says why)
+    from rosbags.typesys.store import Typestore
+
+STORAGES = ("mcap", "sqlite3")  # rosbags' StoragePlugin.MCAP and .SQLITE3
 STAGING_PREFIX = ".part_"  # the staging folders of bags written before one file per segment
 
 
@@ -61,7 +62,10 @@ class BagWriter:
             raise BagWriteError(f"{self.path} exists already: choose a new bag directory")
         self.store = self.store or sgim_typestore()
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._writer = Writer(self.path, version=9, storage_plugin=STORAGES[self.storage])
+        from rosbags.rosbag2 import StoragePlugin, Writer
+
+        plugin = {"mcap": StoragePlugin.MCAP, "sqlite3": StoragePlugin.SQLITE3}[self.storage]
+        self._writer = Writer(self.path, version=9, storage_plugin=plugin)
         self._writer.open()
         self._check_storage()
         self._connections: dict[str, object] = {}
