@@ -540,9 +540,6 @@ def test_the_human_teacher_script_drives_a_run_through_the_prompt(
     assert [m.index for m in run.movements] == list(range(1, 601))
 
 
-if __name__ == "__main__":
-    sys.exit(pytest.main([__file__, "-x", "-q"]))
-
 
 def test_an_interrupted_sgim_acts_run_resumes_and_goes_on_asking(ros_processes, ros_domain,
                                                                  tmp_path):
@@ -588,3 +585,7 @@ def test_an_interrupted_sgim_acts_run_resumes_and_goes_on_asking(ros_processes, 
     meta = yaml.safe_load((cut / "metadata.yaml").read_text())
     assert meta["outcome"] == "finished" and len(meta["resumed"]) == 1
     assert meta["quarantine"]["total"] == 0, meta["quarantine"]
+
+
+if __name__ == "__main__":
+    sys.exit(pytest.main([__file__, "-x", "-q"]))
