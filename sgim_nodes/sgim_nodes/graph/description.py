@@ -22,6 +22,7 @@ from typing import Any
 
 import yaml
 
+from sgim_nodes.bag.writer import STORAGES  # the recorder's bag formats, named once
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.learners import CORE_LEARNER_NAMES, GOAL_BABBLERS
 from sgim_ros.params import Param, ParameterError
@@ -37,7 +38,6 @@ TEACHERS = ("automatic", "human", "web", "external")
 ARBITER_TEACHER = {"automatic": "automatic", "human": "human", "web": "human",
                    "external": "human"}
 WAIT_FOREVER = -1.0  # wait_for_teacher: until the teacher acts (the arbiter's FOREVER)
-STORAGES = ("mcap", "sqlite3")
 MAX_RESPAWNS = 3
 
 
