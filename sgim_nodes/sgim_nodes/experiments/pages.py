@@ -25,6 +25,7 @@ _BLOCK = re.compile(r"(<!-- begin generated (?P<name>[\w.-]+) -->\n)(?P<body>.*?
                     r"(<!-- end generated (?P=name) -->)", re.S)
 _STALE = re.compile(r"<!-- stale (?P<name>[\w.-]+): begin -->\n.*?"
                     r"<!-- stale (?P=name): end -->\n", re.S)
+_STALE_AND_GAP = re.compile(_STALE.pattern + r"\n?", re.S)
 
 
 class PageError(ValueError):
@@ -95,11 +96,7 @@ def has_banner(text: str, experiment: str) -> bool:
 def remove_banner(text: str, experiment: str) -> str:
     """The page without its banner of ``experiment``, and without the blank line that
     with_banner put after it: the page as it was before it was marked."""
-    out = text
-    for m in reversed([m for m in _STALE.finditer(text) if m["name"] == experiment]):
-        end = m.end() + (text[m.end():m.end() + 1] == "\n")
-        out = out[:m.start()] + out[end:]
-    return out
+    return _STALE_AND_GAP.sub(lambda m: "" if m["name"] == experiment else m[0], text)
 
 
 def replace_banner(text: str, block: str, experiment: str) -> str:
