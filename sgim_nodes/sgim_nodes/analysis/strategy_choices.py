@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from sgim_nodes.core.experts import ExpertSpec
+from sgim_nodes.core.strategies import EMULATION, MIMICRY
 from sgim_nodes.core.teaching import GOAL_ONLY
 
 if TYPE_CHECKING:
@@ -72,7 +73,7 @@ def asks_from_run(run: RunData) -> list[Ask]:
     asks = []
     for m, t, content, g in zip(run.ask_index, run.ask_teacher, run.ask_content, run.ask_goal,
                                 strict=True):
-        kind = "emulation" if content == GOAL_ONLY else "mimicry"
+        kind = EMULATION if content == GOAL_ONLY else MIMICRY
         found = modes.get((int(m), f"{kind}:{t}"))
         asks.append(Ask(int(m), str(t), np.asarray(g, dtype=float),
                         found.pop(0) if found else 0))

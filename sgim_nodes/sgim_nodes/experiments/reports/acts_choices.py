@@ -35,6 +35,7 @@ from sgim_nodes.analysis.strategy_choices import (
 )
 from sgim_nodes.analysis.study import RunData
 from sgim_nodes.core.experts import FISHING_EXPERTS
+from sgim_nodes.core.strategies import MIMICRY
 
 WINDOW = 500
 """Movements per window of the strategies over time (issue 33)."""
@@ -87,7 +88,7 @@ def page_order(names: set[str]) -> list[str]:
         kind, _, teacher = name.partition(":") if ":" in name else ("", "", name)
         known = teacher in experts
         return (name != "autonomous", not known, experts.index(teacher) if known else 0,
-                teacher, kind != "mimicry")
+                teacher, kind != MIMICRY)
 
     return sorted(names, key=key)
 
