@@ -23,8 +23,11 @@ from typing import Any
 
 import rclpy
 from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.publisher import Publisher
+from rclpy.subscription import Subscription
 from rclpy.task import Future
 
 from sgim_ros.command_line import check_command_line, read_parameter_file, ros_arguments
@@ -50,6 +53,19 @@ class AsyncNode(Node):
     def __init__(self, name: str, **kwargs: Any) -> None:
         super().__init__(name, **kwargs)
         self._default_callback_group = ReentrantCallbackGroup()
+
+    # rclpy gives every publisher and subscription default QoS-event handlers (they log an
+    # incompatible peer), and its SingleThreadedExecutor rebuilds its wait set in Python, one
+    # entity at a time, at every wake-up: in the arbiter they were 12 of the 31 entities. The
+    # peer on the other side of an incompatible pair still logs it; ours are left out.
+    def create_publisher(self, *args: Any, **kwargs: Any) -> Publisher:
+        kwargs.setdefault("event_callbacks", PublisherEventCallbacks(use_default_callbacks=False))
+        return super().create_publisher(*args, **kwargs)
+
+    def create_subscription(self, *args: Any, **kwargs: Any) -> Subscription:
+        kwargs.setdefault("event_callbacks",
+                          SubscriptionEventCallbacks(use_default_callbacks=False))
+        return super().create_subscription(*args, **kwargs)
 
 
 async def first_of(node: Node, future: Future, timeout: float) -> bool:
