@@ -3,7 +3,8 @@
 #   1. check the prerequisites (Python 3.11, a C++ compiler, cmake);
 #   2. create .venv with ROS 2 Jazzy from PyPI and the pinned Python packages;
 #   3. patch the wheels' CMake files that point at the wheel builder's paths;
-#   4. colcon-build the workspace ros_ws/ (our four packages, built in place).
+#   4. colcon-build the workspace ros_ws/ (our four packages, built in place);
+#   5. compile our modules' bytecode, which PYTHONDONTWRITEBYTECODE would leave unwritten.
 # A second run with nothing changed only compares fingerprints (well under 5 s).
 #
 # Usage: ./bootstrap.sh [--force]     (--force redoes every step)
@@ -91,4 +92,10 @@ if [[ $FORCE == 1 || "$(cat "$BUILD_STAMP" 2>/dev/null)" != "$build_sum" ]]; the
   echo "$build_sum" > "$BUILD_STAMP"
   say "workspace built"
 fi
+
+# 5. Our modules' bytecode. Python reads cached bytecode even where PYTHONDONTWRITEBYTECODE
+# (set on some machines) stops it from writing any: without this step every node process
+# compiled our modules again at each start, about 60 ms of CPU per node (up to date: 0.2 s).
+(cd "$REPO" && "$VENV/bin/python" -m compileall -q sgim_nodes/sgim_nodes sim_bridge/sim_bridge \
+  teacher/teacher sgim_msgs/sgim_ros >/dev/null) || say "warning: could not compile the bytecode"
 say "ready: source ros_ws/env.sh to use the workspace in a shell"

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import subprocess
+from pathlib import Path
 
 from tests.conftest import REPO
 
@@ -39,3 +40,21 @@ def test_second_run_redoes_nothing():
     assert second.returncode == 0
     assert "installing" not in second.stderr and "building" not in second.stderr
     assert "ready" in second.stderr
+
+
+def test_our_modules_bytecode_is_written_even_where_python_writes_none():
+    """Node processes read it at every start; with PYTHONDONTWRITEBYTECODE set (as on some
+    machines) nothing else writes it."""
+    import importlib.util
+
+    sources = [REPO / "sgim_nodes/sgim_nodes/core/learners.py",
+               REPO / "sgim_nodes/sgim_nodes/nodes/social_interaction.py",
+               REPO / "sim_bridge/sim_bridge/fishing_world.py",
+               REPO / "sgim_msgs/sgim_ros/entry.py"]
+    Path(importlib.util.cache_from_source(str(sources[0]))).unlink(missing_ok=True)
+    result = _run({"PYTHONDONTWRITEBYTECODE": "1"})
+    assert result.returncode == 0, result.stderr[-2000:]
+    for source in sources:
+        cached = Path(importlib.util.cache_from_source(str(source)))
+        assert cached.is_file(), f"no bytecode for {source}"
+        assert cached.stat().st_mtime >= source.stat().st_mtime, f"stale bytecode: {cached}"
