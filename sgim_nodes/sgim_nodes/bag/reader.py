@@ -28,20 +28,16 @@ import json
 import re
 import warnings
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from sgim_nodes.bag.mcap_recovery import RecoveryError, recover
+from sgim_nodes.bag.raw import Deserializer, NotABagError, RawRecord
 from sgim_nodes.bag.record_checks import LIMITS_KEY, Limits, Problem, teaching_set_size
 from sgim_nodes.bag.records import RECORD_TYPES, RunRecords, to_record
 from sgim_nodes.bag.types import TOPICS
 from sgim_nodes.bag.validation import RunValidator, summarise
 from sgim_nodes.bag.writer import STAGING_PREFIX
 from sgim_ros.record_key import read_key
-
-if TYPE_CHECKING:
-    from rosbags.typesys.store import Typestore
 
 # rosbags is imported where a bag is read, not with this module: every node imports it (for
 # its checks and to resume) and most never read a bag; its import costs about 0.17 s of CPU.
@@ -53,25 +49,12 @@ __all__ = ["BagReadWarning", "NotABagError", "QuarantineWarning", "RawRecord", "
            "limits_for", "load_run", "read_messages", "read_raw", "storage_files"]
 
 
-class NotABagError(ValueError):
-    """The path is not a rosbag2 bag, or none of its files can be read."""
-
-
 class BagReadWarning(UserWarning):
     """Part of the bag could not be read; what was readable was returned."""
 
 
 class QuarantineWarning(BagReadWarning):
     """Records of the bag failed validation: they were left out (the bag still holds them)."""
-
-
-@dataclass(frozen=True)
-class RawRecord:
-    topic: str
-    msgtype: str
-    timestamp_ns: int  # when the recorder received it
-    data: bytes  # CDR, as it crossed the wire
-    msgdef: str = field(default="", repr=False)
 
 
 def _part_key(path: Path) -> tuple[int, str]:
@@ -241,42 +224,10 @@ def _wanted(topic: str, wanted: set[str] | None) -> bool:
     return wanted is None or topic in wanted or topic.rsplit("/", 1)[-1] in wanted
 
 
-class _Deserializer:
-    """Deserialises with the definitions embedded in the bag (no ROS install needed)."""
-
-    def __init__(self) -> None:
-        from rosbags.typesys import Stores, get_typestore
-
-        self.store: Typestore = get_typestore(Stores.ROS2_JAZZY)
-
-    def __call__(self, record: RawRecord) -> object:
-        return self.store_for(record).deserialize_cdr(record.data, record.msgtype)
-
-    def store_for(self, record: RawRecord) -> Typestore:
-        """The typestore that holds the record's type as the bag defines it."""
-        if record.msgtype not in self.store.types:
-            self._register(record)
-        return self.store
-
-    def _register(self, record: RawRecord) -> None:
-        types: dict = {}
-        if record.msgdef:
-            from rosbags.typesys import get_types_from_msg
-
-            types = get_types_from_msg(record.msgdef, record.msgtype)
-        else:  # a bag written without definitions: use our own .msg files
-            from sgim_nodes.bag.types import sgim_types
-
-            types = sgim_types()
-        self.store.register({k: v for k, v in types.items() if k not in self.store.types})
-        if record.msgtype not in self.store.types:
-            raise NotABagError(f"no definition of {record.msgtype} in the bag")
-
-
 def read_messages(path: str | Path, topics: Iterable[str] | None = None
                   ) -> Iterator[tuple[str, int, object]]:
     """(topic, timestamp_ns, message) in recording order; messages are rosbags dataclasses."""
-    deserialize = _Deserializer()
+    deserialize = Deserializer()
     for record in read_raw(path, topics):
         yield record.topic, record.timestamp_ns, deserialize(record)
 
@@ -324,9 +275,9 @@ def load_run(path: str | Path, topics: Iterable[str] | None = None,
     run = into if into is not None else RunRecords()
     validator = validator or RunValidator(limits or limits_for(path))
     already, superseded = len(validator.quarantined), len(validator.superseded)
-    deserialize = _Deserializer()
+    deserialize = Deserializer()
     wanted = set(TOPICS) if topics is None else set(topics)
-    from sgim_nodes.bag.schema import SchemaError, Upgrader  # it builds on _Deserializer
+    from sgim_nodes.bag.schema import SchemaError, Upgrader  # imports rosbags
 
     upgrader = Upgrader()
 

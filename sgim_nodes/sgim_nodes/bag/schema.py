@@ -24,7 +24,7 @@ from rosbags.interfaces import Nodetype
 from rosbags.typesys.base import normalize_fieldname
 from rosbags.typesys.store import Typestore
 
-from sgim_nodes.bag.reader import NotABagError, RawRecord, _Deserializer
+from sgim_nodes.bag.raw import Deserializer, NotABagError, RawRecord
 from sgim_nodes.bag.records import RECORD_TYPES
 from sgim_nodes.bag.types import TOPICS, typestore
 
@@ -60,7 +60,7 @@ class Upgrader:
     def __init__(self, current: Typestore | None = None) -> None:
         self.current = current or typestore()
         self._verdicts: dict[tuple[str, str], bool] = {}  # (type, recorded definition): same?
-        self._recorded: dict[str, _Deserializer] = {}  # per recorded definition text
+        self._recorded: dict[str, Deserializer] = {}  # per recorded definition text
 
     def is_current(self, record: RawRecord) -> bool:
         """Whether the record's bytes are already today's layout; SchemaError when they can
@@ -98,7 +98,7 @@ class Upgrader:
         if not record.msgdef:  # a bag written without definitions is read with today's
             return True
         try:
-            recorded = self._recorded.setdefault(record.msgdef, _Deserializer()
+            recorded = self._recorded.setdefault(record.msgdef, Deserializer()
                                                  ).store_for(record)
         except NotABagError:
             raise
