@@ -202,7 +202,7 @@ def scan(module: str) -> tuple[set[Endpoint], set[tuple[str, int]]]:
 
 def recorder_endpoints() -> set[Endpoint]:
     """The recorder subscribes in a loop: its topics are bag.types' table, its QoS
-    recorder.topic_qos's rule (state topics latched, kept whole)."""
+    bag/live_topics.topic_qos's rule (state topics latched, kept whole)."""
     from sgim_nodes.bag.types import RECORDED_TOPICS, STATE_TOPICS
 
     return {Endpoint("subscribes", topic, msgtype, "LATEST_STATE, keep-all"

@@ -31,7 +31,6 @@ Parameters: see PARAMS (and `recorder --help`).
 
 from __future__ import annotations
 
-import importlib
 import os
 import sys
 import time
@@ -39,16 +38,15 @@ from pathlib import Path
 
 import yaml
 from rclpy.node import Node
-from rclpy.qos import HistoryPolicy, QoSProfile
 from rclpy.serialization import deserialize_message
 
 from sgim_msgs.msg import RunStatus
+from sgim_nodes.bag.live_topics import ros_message_class, topic_qos
 from sgim_nodes.bag.record_checks import LIMITS_KEY, Limits, teaching_set_size
 from sgim_nodes.bag.run_folder import QUARANTINE_SUFFIX
-from sgim_nodes.bag.types import RECORDED_TOPICS, STATE_TOPICS, TOPICS
+from sgim_nodes.bag.types import RECORDED_TOPICS, TOPICS
 from sgim_nodes.bag.validation import RunValidator
 from sgim_nodes.bag.writer import STORAGES, BagWriteError, BagWriter
-from sgim_ros import qos
 from sgim_ros.entry import run_node
 from sgim_ros.params import Param, at_least, declare, non_negative, one_of, positive
 from sgim_ros.ready import serve_ready
@@ -86,29 +84,6 @@ PARAMS = (
 )
 FINAL_STATES = (RunStatus.STATE_FINISHED, RunStatus.STATE_ABORTED)
 PROGRESS_PERIOD = 10.0  # seconds between progress lines in the log
-
-
-def ros_message_class(msgtype: str) -> type:
-    """The rclpy class of a rosbags type name such as 'sgim_msgs/msg/Movement'."""
-    try:
-        package, kind, name = msgtype.split("/")
-        return getattr(importlib.import_module(f"{package}.{kind}"), name)
-    except (ValueError, ImportError, AttributeError) as error:
-        raise ValueError(f"no ROS message class for type {msgtype!r}: {error}") from None
-
-
-def topic_qos(topic: str, *, keep_all: bool = False) -> QoSProfile:
-    """The graph's QoS for a topic (by its last name component)."""
-    if topic.rsplit("/", 1)[-1] not in STATE_TOPICS:
-        return qos.RECORDS
-    if not keep_all:
-        return qos.LATEST_STATE
-    return QoSProfile(
-        history=HistoryPolicy.KEEP_ALL,
-        depth=1,
-        reliability=qos.LATEST_STATE.reliability,
-        durability=qos.LATEST_STATE.durability,
-    )
 
 
 def resumed_counts(run_dir: str, segments: int = 0) -> tuple[int, int]:
