@@ -109,13 +109,19 @@ class Experiment:
         """The runner's jobs (runner maker)."""
         from sgim_nodes.experiments.runner_jobs import expand_jobs
 
-        return expand_jobs(self.runs, str(self.path))
+        try:
+            return expand_jobs(self.runs, str(self.path))
+        except ValueError as error:
+            raise ExperimentError(str(error)) from None
 
     @cached_property
     def world_jobs(self):
         from sgim_nodes.experiments.world_jobs import expand_jobs
 
-        return expand_jobs(self.runs, str(self.path))
+        try:
+            return expand_jobs(self.runs, str(self.path))
+        except ValueError as error:
+            raise ExperimentError(str(error)) from None
 
     def run_fingerprints(self) -> dict[str, str]:
         """Run name -> the learner fingerprint today's checkout gives it."""

@@ -92,44 +92,39 @@ def _seeds(value: Any, where: str) -> list[int]:
 
 def expand_jobs(runs: Mapping[str, Any], where: str) -> list[RunnerJob]:
     """Every job of an experiment's ``runs`` (ValueError naming the problem)."""
-    from sgim_nodes.experiments.pinned import ExperimentError
-
     unknown = sorted(set(runs) - set(KEYS))
     if unknown:
-        raise ExperimentError(f"{where}: unknown runner setting(s) {', '.join(unknown)}; "
-                              f"the settings are {', '.join(KEYS)}")
-    try:
-        seeds = _seeds(runs.get("seeds", 1), where)
-    except ValueError as error:
-        raise ExperimentError(str(error)) from None
+        raise ValueError(f"{where}: unknown runner setting(s) {', '.join(unknown)}; "
+                         f"the settings are {', '.join(KEYS)}")
+    seeds = _seeds(runs.get("seeds", 1), where)
     config = dict(runs.get("set") or {})
     try:
         LearnerConfig(**config)
     except (TypeError, ValueError) as error:
-        raise ExperimentError(f"{where}: set: {error}") from None
+        raise ValueError(f"{where}: set: {error}") from None
     goals, rule = runs.get("goals", "benchmark"), runs.get("teacher_rule", DEFAULT_REACHED_RULE)
     if goals not in GOAL_SETS or rule not in REACHED_RULES:
-        raise ExperimentError(f"{where}: goals must be one of {', '.join(GOAL_SETS)} and "
-                              f"teacher_rule one of {', '.join(REACHED_RULES)}")
+        raise ValueError(f"{where}: goals must be one of {', '.join(GOAL_SETS)} and "
+                         f"teacher_rule one of {', '.join(REACHED_RULES)}")
     movements, eval_every = runs.get("movements", 5000), runs.get("eval_every", 250)
     if not all(isinstance(v, int) and not isinstance(v, bool) and v >= 1
                for v in (movements, eval_every)):
-        raise ExperimentError(f"{where}: movements and eval_every must be integers >= 1")
+        raise ValueError(f"{where}: movements and eval_every must be integers >= 1")
     jobs = []
     for b, block in enumerate(runs.get("grid") or [{}]):
         here = f"{where}, grid block {b + 1}"
         if not isinstance(block, Mapping) or set(block) != {"world", "learner"}:
-            raise ExperimentError(f"{here}: a block names 'world' and 'learner', and only them")
+            raise ValueError(f"{here}: a block names 'world' and 'learner', and only them")
         for world in _as_list(block["world"]):
             for learner in _as_list(block["learner"]):
                 if world not in WORLDS or learner not in LEARNER_NAMES:
-                    raise ExperimentError(f"{here}: world must be one of {', '.join(WORLDS)} "
-                                          f"and learner one of {', '.join(LEARNER_NAMES)}")
+                    raise ValueError(f"{here}: world must be one of {', '.join(WORLDS)} "
+                                     f"and learner one of {', '.join(LEARNER_NAMES)}")
                 jobs += [RunnerJob(world, learner, seed, movements, eval_every, goals,
                                    tuple(sorted(config.items())), rule) for seed in seeds]
     names = [job.name for job in jobs]
     if len(set(names)) != len(names):
-        raise ExperimentError(f"{where}: a world, learner and seed appear twice")
+        raise ValueError(f"{where}: a world, learner and seed appear twice")
     return jobs
 
 

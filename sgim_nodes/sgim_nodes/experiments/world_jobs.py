@@ -43,13 +43,11 @@ class CastChunk:
 
 
 def expand_jobs(runs: Mapping[str, Any], where: str) -> list[CastChunk]:
-    from sgim_nodes.experiments.pinned import ExperimentError
-
     unknown = sorted(set(runs) - set(KEYS))
     values = {k: runs.get(k) for k in KEYS}
     if unknown or not all(isinstance(v, int) and not isinstance(v, bool) and v >= 0
                           for v in values.values()) or values["chunk"] < 1:
-        raise ExperimentError(f"{where}: runs takes casts, chunk (>= 1) and seed, integers")
+        raise ValueError(f"{where}: runs takes casts, chunk (>= 1) and seed, integers")
     total, chunk = values["casts"], values["chunk"]
     return [CastChunk(values["seed"], k, min(chunk, total - k * chunk))
             for k in range(math.ceil(total / chunk))]
