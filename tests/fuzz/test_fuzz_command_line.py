@@ -102,8 +102,9 @@ def _files(root: Path) -> None:
 @given(data=st.data())
 def test_the_command_line_is_refused_in_one_line_or_planned(tmp_path_factory, monkeypatch,
                                                              data):
-    from sgim_nodes.graph.experiment import plan_new, plan_resume, prefixes
+    from sgim_nodes.graph.experiment import prefixes
     from sgim_nodes.graph.experiment_options import parse_args
+    from sgim_nodes.graph.plan import plan_new, plan_resume
     from sgim_nodes.graph.run_folder import RunFolderError
     from sgim_ros.params import ParameterError
 

@@ -279,7 +279,7 @@ def test_the_launcher_refuses_a_misspelt_name_in_a_parameter_file(tmp_path, caps
 def test_metadata_holds_every_parameter_of_every_node_with_the_value_it_runs_with(tmp_path):
     """What an audit of a run needs: the teacher's tolerance, the simulator's noise, the
     recorder's settings, ... whether given or left at their defaults."""
-    from sgim_nodes.graph.experiment import plan_new
+    from sgim_nodes.graph.plan import plan_new
 
     params_file = tmp_path / "extra.yaml"
     params_file.write_text("sim_bridge:\n  ros__parameters:\n    noise: 0.01\n")
@@ -314,7 +314,7 @@ def test_the_default_timeout_is_bounded_and_grows_with_the_budget():
 
 def test_web_teacher_options_become_its_parameters_and_the_token_stays_out_of_metadata(
         tmp_path):
-    from sgim_nodes.graph.experiment import plan_new
+    from sgim_nodes.graph.plan import plan_new
 
     plan = plan_new(_args("sgim-d", "--teacher", "web", "--web-host", "0.0.0.0",
                           "--wait-for-teacher", "forever", "--runs-dir", str(tmp_path),
@@ -365,7 +365,7 @@ def _what_nodes_read(params_file: Path, spec) -> dict:
                                                   ("sgim-acts", "web"),
                                                   ("random", "automatic")])
 def test_the_launch_file_starts_what_run_experiment_starts(tmp_path, learner, teacher):
-    from sgim_nodes.graph.experiment import plan_new
+    from sgim_nodes.graph.plan import plan_new
 
     params_file = tmp_path / "extra.yaml"
     params_file.write_text("/**:\n  ros__parameters:\n    goal_budget: 7\n"

@@ -262,7 +262,7 @@ def test_a_sweep_file_is_read_as_a_parameter_file_is(tmp_path):
 @pytest.mark.parametrize("name", ["../../etc", "..", ".", "", "a/b", "/tmp/x", "n\0ul",
                                   "new\nline", "x" * 256])
 def test_a_run_name_must_be_one_folder_inside_the_runs_dir(capsys, tmp_path, name):
-    from sgim_nodes.graph.experiment import plan_new
+    from sgim_nodes.graph.plan import plan_new
     from sgim_nodes.graph.run_folder import RunFolderError
 
     runs = tmp_path / "deep" / "runs"
@@ -293,7 +293,7 @@ def test_a_runs_dir_that_cannot_hold_a_run_is_one_line(capsys, tmp_path):
 
 
 def test_a_good_name_makes_the_run_folder_inside_the_runs_dir(tmp_path):
-    from sgim_nodes.graph.experiment import plan_new
+    from sgim_nodes.graph.plan import plan_new
 
     plan = plan_new(_args("random", "--runs-dir", str(tmp_path), "--name", "seed-3 (retry)"))
     plan.lock.release()
@@ -324,7 +324,7 @@ def test_prefix_with_an_unclosed_quote_is_one_line():
 
 
 def test_a_namespace_without_a_name_gets_the_default_folder(tmp_path):
-    from sgim_nodes.graph.experiment import plan_new
+    from sgim_nodes.graph.plan import plan_new
 
     args = _args("random", "--runs-dir", str(tmp_path))
     assert isinstance(args, argparse.Namespace) and args.name is None

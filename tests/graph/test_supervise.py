@@ -56,8 +56,8 @@ def test_a_resumed_runs_failure_names_the_log_of_its_own_segment(tmp_path):
 
     import yaml
 
-    from sgim_nodes.graph.experiment import plan_new, plan_resume
     from sgim_nodes.graph.experiment_options import parse_args
+    from sgim_nodes.graph.plan import plan_new, plan_resume
     from sgim_nodes.graph.run_folder import write_metadata
     from sgim_nodes.graph.supervise import Supervisor
     from tests.bag.samples import synthetic_run, write_bag

@@ -23,7 +23,7 @@ def _args(*argv: str):
 
 def test_web_linger_is_a_run_option_that_reaches_the_web_teacher(tmp_path, capsys):
     from sgim_nodes.graph.description import RunOptions, parameters
-    from sgim_nodes.graph.experiment import plan_new
+    from sgim_nodes.graph.plan import plan_new
 
     plan = plan_new(_args("sgim-d", "--teacher", "web", "--runs-dir", str(tmp_path),
                           "--name", "web"))
