@@ -8,15 +8,11 @@ import sys
 import time
 
 from sgim_ros.entry import PROFILE_ENV, Profile
-from tests.conftest import REPO
+from tests.benchmarks.scripts import load_benchmark
 
 
 def load_bench():
-    spec = importlib.util.spec_from_file_location(
-        "bench_graph_vs_runner", REPO / "benchmarks" / "bench_graph_vs_runner.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_benchmark("bench_graph_vs_runner")
 
 
 def busy(seconds: float) -> None:

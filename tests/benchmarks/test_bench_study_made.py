@@ -3,22 +3,19 @@ logs' cast counts and their metadata's spans."""
 
 from __future__ import annotations
 
-import importlib.util
 import subprocess
 
 import pytest
 import yaml
 
+from tests.benchmarks.scripts import load_benchmark
 from tests.conftest import PYTHON, REPO
 
 SCRIPT = REPO / "benchmarks" / "bench_study.py"
 
 
 def load_bench():
-    spec = importlib.util.spec_from_file_location("bench_study", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_benchmark("bench_study")
 
 
 def test_busy_time_counts_overlaps_once_and_skips_pauses():

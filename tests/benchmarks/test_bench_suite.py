@@ -2,11 +2,7 @@
 
 from __future__ import annotations
 
-import importlib.util
-
-from tests.conftest import REPO
-
-SCRIPT = REPO / "benchmarks" / "bench_suite.py"
+from tests.benchmarks.scripts import load_benchmark
 
 OUTPUT = """\
 [bootstrap] ready: source ros_ws/env.sh to use the workspace in a shell
@@ -26,10 +22,7 @@ FAILED tests/ros/test_pace.py::test_turns - AssertionError
 
 
 def load():
-    spec = importlib.util.spec_from_file_location("bench_suite", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_benchmark("bench_suite")
 
 
 def test_the_summary_line_is_read_whole():
