@@ -30,11 +30,20 @@ RUN = str(REPO / "ros_ws" / "run_experiment.sh")
 IMITATIONS = LearnerConfig().imitation_count
 
 
-def run_graph(ros_processes, ros_domain, tmp_path, learner, *extra, timeout=300, seed=SEED):
+def run_graph(ros_processes, ros_domain, tmp_path, learner, *extra, timeout=300, seed=SEED,
+              eval_every=EVAL_EVERY, markers=False):
+    """The reference run of `learner` through the graph (tests/golden_runs.py), started.
+
+    `eval_every` 0 for a test that checks no evaluation: only the first and the last are made
+    (the evaluator casts in a world of its own, so the movements stay the same). `markers`:
+    the whole graph, the markers node too, for the runs of each learner as a user starts them;
+    the others leave it out (it only listens; tests/ros/test_markers.py checks its topics)."""
+    if not markers:
+        extra = ("--no-markers", *extra)
     child = ros_processes.start(
         f"run-{learner}",
         [RUN, learner, "--seed", str(seed), "--movements", str(MOVEMENTS), "--eval-every",
-         str(EVAL_EVERY), "--period", str(PERIOD), "--runs-dir", str(tmp_path), "--name",
+         str(eval_every), "--period", str(PERIOD), "--runs-dir", str(tmp_path), "--name",
          learner, "--domain", str(ros_domain), "--quiet", "--timeout", str(timeout), *extra],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     return child
@@ -99,9 +108,9 @@ def test_teachers_taking_turns_through_the_graph(ros_processes, ros_domain, tmp_
     names = ("centre", "west", "rough")
     child = run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--param",
                       f"tolerance_noise={TOLERANCE['sgim-d']}", "--param",
-                      f"teacher_turns={','.join(names)}")
-    later = runner_records_later("sgim-d", teacher_turns=turn_specs("fishing",
-                                                                     ",".join(names)))
+                      f"teacher_turns={','.join(names)}", eval_every=0)
+    later = runner_records_later("sgim-d", eval_every=0,
+                                 teacher_turns=turn_specs("fishing", ",".join(names)))
     run = finish(child, tmp_path, "sgim-d")
     records = later.result()
     assert bag_digest(run.movements) == runner_digest(records) != DIGESTS["sgim-d"]
@@ -121,9 +130,9 @@ def test_the_teachers_choice_rule_through_the_graph(ros_processes, ros_domain, t
     choice, seed = "farthest-unreached", 1  # seed 1: 3 entries shown, others than by default
     child = run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--param",
                       f"tolerance_noise={TOLERANCE['sgim-d']}", "--param",
-                      f"teacher_choice={choice}", seed=seed)
-    later = runner_records_later("sgim-d", seed=seed, teacher_choice=choice)
-    by_default = runner_records_later("sgim-d", seed=seed)
+                      f"teacher_choice={choice}", seed=seed, eval_every=0)
+    later = runner_records_later("sgim-d", seed=seed, eval_every=0, teacher_choice=choice)
+    by_default = runner_records_later("sgim-d", seed=seed, eval_every=0)
     run = finish(child, tmp_path, "sgim-d")
     records = later.result()
     shown = [d.teaching_set_index for d in run.demonstrations if len(d.action)]
@@ -148,8 +157,8 @@ def test_the_own_movements_rule_s_checks_through_the_graph(ros_processes, ros_do
 
     child = run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--param",
                       f"tolerance_noise={TOLERANCE['sgim-d']}", "--param",
-                      "reached_rule=own-movements")
-    later = runner_records_later("sgim-d", teacher_rule="own-movements")
+                      "reached_rule=own-movements", eval_every=0)
+    later = runner_records_later("sgim-d", eval_every=0, teacher_rule="own-movements")
     run = finish(child, tmp_path, "sgim-d")
     records = later.result()
     moves = [r for r in records if r["type"] == "movement"]
@@ -307,8 +316,9 @@ def test_where_reach_goal_jobs_end_changes_no_movement(ros_processes, ros_domain
     the jobs end at other goal boundaries than the default's, and the run is still the
     runner's, movement for movement (the explorer's choose_goal waits for every competence)."""
     child = run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--param",
-                      f"tolerance_noise={TOLERANCE['sgim-d']}", "--param", "goals_per_job=2")
-    later = runner_records_later("sgim-d")
+                      f"tolerance_noise={TOLERANCE['sgim-d']}", "--param", "goals_per_job=2",
+                      eval_every=0)
+    later = runner_records_later("sgim-d", eval_every=0)
     run = finish(child, tmp_path, "sgim-d")
     moves = [r for r in later.result() if r["type"] == "movement"]
     assert len(run.movements) == len(moves) == MOVEMENTS
@@ -325,7 +335,7 @@ def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner)
     from sgim_msgs.msg import Movement, RunStatus
 
     extra = ["--param", f"tolerance_noise={TOLERANCE[learner]}"] if learner in TOLERANCE else []
-    child = run_graph(ros_processes, ros_domain, tmp_path, learner, *extra)
+    child = run_graph(ros_processes, ros_domain, tmp_path, learner, *extra, markers=True)
     later = runner_records_later(learner)
     run = finish(child, tmp_path, learner)
 
@@ -409,7 +419,7 @@ def test_sgim_acts_through_the_graph(ros_processes, ros_domain, tmp_path):
     the same competence per (strategy, goal)."""
     from sgim_msgs.msg import Goal
 
-    child = run_graph(ros_processes, ros_domain, tmp_path, "sgim-acts")
+    child = run_graph(ros_processes, ros_domain, tmp_path, "sgim-acts", markers=True)
     later = runner_records_later("sgim-acts")
     run = finish(child, tmp_path, "sgim-acts")
     records = later.result()
