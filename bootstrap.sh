@@ -60,7 +60,14 @@ if [[ $FORCE == 1 || ! -x "$VENV/bin/python" || "$(cat "$REQ_STAMP" 2>/dev/null)
   fi
   say "installing the pinned Python packages (ROS 2 Jazzy wheels included; about a minute the first time)"
   "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --upgrade pip
-  "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -r "$REPO/requirements.txt"
+  # Bytecode is compiled after, on every core: pip compiles one file at a time (45 s in all
+  # against 28 + 9 s, docs/notes/measurements.md). Without bytecode, every process would
+  # compile numpy and rclpy again where PYTHONDONTWRITEBYTECODE is set.
+  "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-compile \
+    -r "$REPO/requirements.txt"
+  "$VENV/bin/python" -m compileall -q -j 0 "$("$VENV/bin/python" -c \
+    'import sysconfig; print(sysconfig.get_paths()["purelib"])')" >/dev/null 2>&1 ||
+    true  # a package's non-Python file (a template) may not compile; pip skips those too
   # 3. The wheels' CMake exports name the wheel builder's Python paths; point them here.
   say "pointing the ROS wheels' CMake files at this machine's Python"
   "$VENV/bin/python" "$REPO/ros_ws/fix_wheel_cmake_paths.py" "$VENV"
@@ -96,6 +103,6 @@ fi
 # 5. Our modules' bytecode. Python reads cached bytecode even where PYTHONDONTWRITEBYTECODE
 # (set on some machines) stops it from writing any: without this step every node process
 # compiled our modules again at each start, about 60 ms of CPU per node (up to date: 0.2 s).
-(cd "$REPO" && "$VENV/bin/python" -m compileall -q sgim_nodes/sgim_nodes sim_bridge/sim_bridge \
-  teacher/teacher sgim_msgs/sgim_ros >/dev/null) || say "warning: could not compile the bytecode"
+(cd "$REPO" && "$VENV/bin/python" -m compileall -q -j 0 sgim_nodes/sgim_nodes \
+  sim_bridge/sim_bridge teacher/teacher sgim_msgs/sgim_ros >/dev/null) || say "warning: could not compile the bytecode"
 say "ready: source ros_ws/env.sh to use the workspace in a shell"

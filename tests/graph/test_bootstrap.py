@@ -58,3 +58,15 @@ def test_our_modules_bytecode_is_written_even_where_python_writes_none():
         cached = Path(importlib.util.cache_from_source(str(source)))
         assert cached.is_file(), f"no bytecode for {source}"
         assert cached.stat().st_mtime >= source.stat().st_mtime, f"stale bytecode: {cached}"
+
+
+def test_the_venv_packages_have_their_bytecode():
+    """pip installs without compiling and bootstrap compiles on every core after: numpy's and
+    rclpy's modules, read by every node at start, must have their bytecode."""
+    import importlib.util
+
+    for package in ("numpy", "rclpy"):
+        source = Path(importlib.util.find_spec(package).origin)
+        for module in (source, *sorted(source.parent.glob("*.py"))[:5]):
+            cached = Path(importlib.util.cache_from_source(str(module)))
+            assert cached.is_file(), f"no bytecode for {module}"
