@@ -2,7 +2,7 @@
 # Set up what is missing (./bootstrap.sh and Debian's chromium, idempotent), lint with ruff,
 # then run the tests.
 #
-#   ./test.sh            the whole suite, on every core: pytest-xdist workers, one more than
+#   ./test.sh            the whole suite, on every core: pytest-xdist workers, two more than
 #                        the cores (SGIM_TEST_WORKERS=N for another count), each in a ROS
 #                        domain of its own; a worker takes whole test files, the longest first
 #                        (tests/scheduling.py).
@@ -39,10 +39,11 @@ if [[ $quick == 1 ]]; then
   SGIM_TEST_QUICK=1 python -m pytest -q --timeout=600 -n "$workers" -m "not ros and not slow" \
     "$@"
 else
-  # One worker more than the cores: the graph tests spend part of their time waiting (for
-  # discovery, a teacher's turn, a timeout they test), and the extra worker fills those waits
-  # (2 cores: 636 s against 694 s of pytest, docs/notes/measurements.md).
-  workers="${SGIM_TEST_WORKERS:-$(( $(nproc) + 1 ))}"
+  # Two workers more than the cores: the graph tests spend part of their time waiting (for
+  # discovery, a teacher's turn, a timeout they test), and the extra workers fill those waits
+  # (2 quiet cores: pytest 694 s with 2 workers, 636 s with 3; later 534 s with 3, 504 s
+  # with 4; docs/notes/measurements.md).
+  workers="${SGIM_TEST_WORKERS:-$(( $(nproc) + 2 ))}"
   # ROS tests must run here: a missing rclpy or sgim_msgs is an error, not a skip.
   SGIM_REQUIRE_ROS=1 python -m pytest -q --timeout=600 -n "$workers" "$@"
 fi
