@@ -74,9 +74,20 @@ def test_a_job_spans_goals_up_to_its_cap_its_goal_count_or_a_cancel(ros_processe
             handle.cancel_goal_async()
         done = handle.get_result_async()
         assert client.spin_until(done.done, 120)
-        client.spin_for(0.5)  # every record of the job is in
         response = done.result()
         result = response.result
+
+        def all_in() -> bool:
+            """The job's records and last feedback have come: they travel on topics of their
+            own, and a sample lost on a loaded machine comes again only at the next
+            heartbeat, after the result."""
+            return (sum(m.index > state["count"] for m in moves) >= result.movements_used
+                    and sum(c.movement_index > state["count"] for c in competences)
+                    >= result.goals_attempted
+                    and bool(feedback) and feedback[-1] >= result.movements_used)
+
+        client.spin_until(all_in, 30)
+        client.spin_for(0.2)  # and nothing more (a record too many would show below)
         made = [m for m in moves if m.index > state["count"]]
         attempted = [c for c in competences if c.movement_index > state["count"]]
         # The result accounts for every movement, in order, and every attempted goal.
