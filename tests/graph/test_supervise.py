@@ -130,6 +130,26 @@ def test_a_teardown_stuck_in_c_code_holding_the_gil_still_ends_and_leaves_its_st
     assert "Timeout (0:00:01)!" in log and "stuck_in_c" in log
 
 
+def test_a_deadline_past_a_recorded_run_ends_with_the_runs_own_exit_code(python_child,
+                                                                        tmp_path):
+    """The launcher's goodbye to DDS (its own node's teardown) can hang after the run is
+    recorded: the stacks still go to launcher.log, and the exit code stays the run's."""
+    child = python_child("""\
+        def stuck_in_c():
+            re.match(r"(a+)+$", "a" * 40 + "b")
+        with supervise.hard_deadline(1.0, exit_code=0):
+            stuck_in_c()
+        """)
+    assert child.wait(timeout=120) == 0
+    log = (tmp_path / "launcher.log").read_text()
+    assert "Timeout (0:00:01)!" in log and "stuck_in_c" in log
+    child = python_child("""\
+        with supervise.hard_deadline(1.0, exit_code=130):
+            re.match(r"(a+)+$", "a" * 40 + "b")
+        """)
+    assert child.wait(timeout=120) == 130
+
+
 def test_a_block_that_ends_in_time_disarms_its_deadline(python_child, tmp_path):
     child = python_child("""\
         with supervise.hard_deadline(0.5):

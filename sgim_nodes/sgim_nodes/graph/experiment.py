@@ -225,8 +225,10 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
         + (" (interrupted: the bag holds what was recorded; --resume carries on)"
            if code > 128 else ""))
     if progress is not None:  # last: DDS participant deletion is where a process can hang
+        # (seen once under load, 20 s in the /parameter_events writer's deletion); the run is
+        # recorded by now, so a hang there leaves its stacks and the run's own exit code.
         with supervise.stop_signals() as shielded, shielded(), \
-                supervise.hard_deadline(supervise.CLOSE_LIMIT):
+                supervise.hard_deadline(supervise.CLOSE_LIMIT, exit_code=code):
             progress.close()
     return code
 

@@ -6,8 +6,8 @@ as a full disk). Any other node that stops before the end fails the run, the sim
 excepted (it holds no state and is restarted, at most MAX_RESPAWNS times). Every wait here is
 bounded: the run's --timeout, the arbiter's exit after its last status, the recorder's end,
 and the launcher's own teardown (`hard_deadline`: past it, every thread's stack goes to
-launcher.log and the launcher exits with 1; `kill -USR1` a launcher to get those stacks at any
-time).
+launcher.log and the launcher exits with 1, or with the run's own code once the run is
+recorded; `kill -USR1` a launcher to get those stacks at any time).
 
 The launcher's own output goes to the terminal and to logs/launcher.log; a terminal pipe that
 breaks (`run_experiment.sh ... | tee log`, then Ctrl-C, which also ends tee) is noticed once
@@ -120,19 +120,59 @@ def stacks_on_request(signum: int = signal.SIGUSR1) -> None:
 
 
 @contextlib.contextmanager
-def hard_deadline(seconds: float):
+def hard_deadline(seconds: float, exit_code: int = 1):
     """The last resort for a block that must end: if it is still running after `seconds`,
-    every thread's stack goes to launcher.log (else stderr) and the process exits with 1.
-    faulthandler's watchdog is a C thread, so it fires even when a thread hangs in C code
-    holding the GIL (an rclpy or DDS call), where no Python timer could run."""
+    every thread's stack goes to launcher.log (else stderr) and the process exits with
+    `exit_code` (the run's own, when only the launcher's goodbye to DDS is left). Both are
+    done by C threads (faulthandler's watchdog, a timer of the C library), so they fire even
+    when a thread hangs in C code holding the GIL (an rclpy or DDS call), where no Python
+    timer could run."""
     stream = _stack_file()
     with contextlib.suppress(OSError, ValueError):
         stream.flush()
-    faulthandler.dump_traceback_later(seconds, exit=True, file=stream)
+    faulthandler.dump_traceback_later(seconds, exit=False, file=stream)
+    disarm = _exit_later(seconds + STACKS_MARGIN, exit_code)
     try:
         yield
     finally:
+        disarm()
         faulthandler.cancel_dump_traceback_later()
+
+
+STACKS_MARGIN = 0.5  # seconds between the stacks written and the exit
+
+
+def _exit_later(seconds: float, code: int) -> Callable[[], None]:
+    """End the process with `code` after `seconds` from a thread the C library starts
+    (POSIX timer_create, SIGEV_THREAD, calling _exit): no Python runs on the way. Returns
+    what disarms it."""
+    import ctypes
+
+    class SigVal(ctypes.Union):
+        _fields_ = [("sival_int", ctypes.c_int), ("sival_ptr", ctypes.c_void_p)]
+
+    class SigEvent(ctypes.Structure):  # glibc's struct sigevent, 64 bytes on 64-bit Linux
+        _fields_ = [("sigev_value", SigVal), ("sigev_signo", ctypes.c_int),
+                    ("sigev_notify", ctypes.c_int), ("function", ctypes.c_void_p),
+                    ("attributes", ctypes.c_void_p), ("_pad", ctypes.c_byte * 32)]
+
+    class TimeSpec(ctypes.Structure):
+        _fields_ = [("tv_sec", ctypes.c_long), ("tv_nsec", ctypes.c_long)]
+
+    libc = ctypes.CDLL(None, use_errno=True)  # timer_create is in glibc's libc since 2.34
+    event = SigEvent(sigev_value=SigVal(sival_int=code), sigev_notify=2,  # SIGEV_THREAD
+                     function=ctypes.cast(libc._exit, ctypes.c_void_p))
+    timer = ctypes.c_void_p()
+    if libc.timer_create(1, ctypes.byref(event), ctypes.byref(timer)) != 0:  # CLOCK_MONOTONIC
+        raise OSError(ctypes.get_errno(), "timer_create failed")
+    whole = int(seconds)
+    setting = (TimeSpec * 2)(TimeSpec(0, 0), TimeSpec(whole, int((seconds - whole) * 1e9)))
+    libc.timer_settime(timer, 0, setting, None)
+
+    def disarm() -> None:
+        libc.timer_delete(timer)
+
+    return disarm
 
 
 @contextlib.contextmanager
