@@ -85,7 +85,7 @@ MAX_SPEED = 200.0  # m/s: a hook faster than this means the integration exploded
 # MLCP solved directly by Dantzig's pivoting (``_build`` selects it; why: README_world.md). Bullet
 # falls back to its sequential-impulse sweeps only if pivoting fails; SOLVER_ITERATIONS is their
 # number (and the sweeps of the previous solver, MLCP with projected Gauss-Seidel, which
-# bench_sim_speed.py and measure_world.py still offer as ``--solver gauss-seidel``).
+# bench_sim_speed.py still offers as ``--solver gauss-seidel``).
 SOLVER_ITERATIONS = 50
 
 
@@ -189,9 +189,10 @@ class FishingWorld:
                                      physicsClientId=c)
         # Dantzig's pivoting solves the step's MLCP exactly. Measured against the converged
         # solver (MLCP, 300 Gauss-Seidel sweeps): touch-downs within 1e-11, where the previous
-        # 50 Gauss-Seidel sweeps were up to 0.0028 off; measure_world.py's learnability figures
-        # identical to the last printed digit; 13-15 % more casts per second (104.8 against
-        # 92.8 casts/s, 2026-12-04, AMD EPYC; README_world.md, Constraint solver and Speed).
+        # 50 Gauss-Seidel sweeps were up to 0.0028 off; the learnability figures of the time
+        # (benchmarks/measure_world.py, now the `world` experiment) identical to the last
+        # printed digit; 13-15 % more casts per second (104.8 against 92.8 casts/s,
+        # 2026-12-04, AMD EPYC; README_world.md, Constraint solver and Speed).
         with _quiet_c_stdout():  # pybullet prints "switched solver" from C
             pb.setPhysicsEngineParameter(constraintSolverType=pb.CONSTRAINT_SOLVER_LCP_DANTZIG,
                                          numSolverIterations=SOLVER_ITERATIONS,

@@ -23,8 +23,9 @@ N_JOINTS = 6
 ACTION_DIM = 4 * N_JOINTS
 OUTCOME_DIM = 2
 # The outcome noise under the paper's protocol (20 random actions x 10 casts; the mean over
-# actions of the mean distance of the casts to their mean), averaged over 12 seeds by
-# benchmarks/measure_world.py: 0.068 (paper 0.073). The learner's distances are multiples of it.
+# actions of the mean distance of the casts to their mean), averaged over 12 seeds: about 0.07
+# (paper 0.073; today's figure: `ros_ws/reproduce.sh world`, sim_bridge/README_world.md). The
+# learner's distances are multiples of it.
 OUTCOME_NOISE = 0.07
 
 # Casting ranges (rad), inside the xArm6 limits: yaw +-46 deg in front of the pier; shoulder,

@@ -12,7 +12,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 REPORTS = {"study": "study", "social_modes": "social_modes", "learners": "learners",
-           "isolated_region": "isolated_region", "active_strategies": "active_strategies"}
+           "isolated_region": "isolated_region", "active_strategies": "active_strategies",
+           "world": "world"}
 
 
 @dataclass
