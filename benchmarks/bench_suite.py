@@ -64,6 +64,20 @@ def longest(output: str, count: int = LONGEST) -> list[tuple[float, str]]:
     return sorted(((s, t) for t, s in totals.items()), reverse=True)[:count]
 
 
+def failures(output: str, limit: int = 12_000) -> str:
+    """pytest's FAILURES section (each failure's traceback and node logs), at most `limit`
+    characters of it: what a failed timing run must show, since its clone is removed."""
+    start = output.find("= FAILURES =")
+    if start < 0:
+        return ""
+    start = output.rfind("\n", 0, start) + 1
+    ends = [i for i in (output.find(" warnings summary ", start),
+                        output.find(" short test summary info ", start)) if i >= 0]
+    end = output.rfind("\n", 0, min(ends)) + 1 if ends else len(output)
+    text = output[start:end]
+    return text if len(text) <= limit else text[:limit] + "\n[... cut]\n"
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -98,7 +112,10 @@ def main(argv: list[str] | None = None) -> int:
         for seconds, test in longest(output):
             print(f"  {seconds:6.1f} s  {test}")
         if code != 0:
-            print(output[-3000:], file=sys.stderr)
+            kept = Path(tempfile.gettempdir()) / f"bench-suite-{head}-test.log"
+            shutil.copyfile(scratch / "test.log", kept)
+            print(failures(output) or output[-3000:], file=sys.stderr)
+            print(f"the whole output: {kept}", file=sys.stderr)
         return 0 if code == 0 else 1
     finally:
         if args.keep:

@@ -9,6 +9,16 @@ OUTPUT = """\
 All checks passed!
 ........................................................................ [ 98%]
 .F.                                                                      [100%]
+=================================== FAILURES ===================================
+__________________________________ test_turns __________________________________
+>       assert turns == 3
+E       AssertionError: assert 2 == 3
+---------------------------------- node logs -----------------------------------
+== logs/sim.log (last 1 lines)
+[INFO] fishing world ready
+=============================== warnings summary ===============================
+tests/x.py::test_y
+  a warning
 ============================= slowest 40 durations =============================
 61.20s call     tests/ros/test_graph_runs.py::test_learner_through_the_graph[sgim-d]
 4.50s setup    tests/browser/test_web_teacher_page.py::test_the_page_shows_the_run
@@ -36,3 +46,12 @@ def test_the_longest_tests_add_their_setup_call_and_teardown():
                               "[sgim-d]"),
                        (44.5, "tests/browser/test_web_teacher_page.py::test_the_page_shows_"
                               "the_run")]
+
+
+def test_a_failed_run_shows_each_failure_with_its_node_logs():
+    shown = load().failures(OUTPUT)
+    assert shown.startswith("=" * 35 + " FAILURES ")
+    assert "E       AssertionError: assert 2 == 3" in shown and "fishing world ready" in shown
+    assert "warnings summary" not in shown and "slowest" not in shown
+    assert load().failures(OUTPUT, limit=100).endswith("[... cut]\n")
+    assert load().failures("1 passed in 2.0s\n") == ""
