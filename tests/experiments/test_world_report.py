@@ -3,6 +3,8 @@ settings checked, and a tiny experiment made into a page with every block and th
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -25,6 +27,16 @@ def test_probes_are_jobs_one_per_seed_beside_the_chunks():
     # A probe's settings are part of its fingerprint: another count is another job.
     other = world_jobs.expand_jobs({"noise": {"seeds": 1, "actions": 20, "attempts": 9}}, "x")
     assert other[0].fingerprint().value != jobs[5].fingerprint().value
+
+
+def test_a_change_of_the_probes_code_changes_their_fingerprint(monkeypatch, tmp_path):
+    job = world_jobs.expand_jobs({"sensitivity": {"seeds": 1, "actions": 20}}, "x")[0]
+    before = job.fingerprint().value
+    changed = tmp_path / "world_probes.py"
+    changed.write_text(Path(world_probes.__file__).read_text().replace("DELTA = 1e-3",
+                                                                        "DELTA = 1e-2"))
+    monkeypatch.setattr(world_probes, "__file__", str(changed))
+    assert job.fingerprint().value != before
 
 
 @pytest.mark.parametrize(("runs", "message"), [

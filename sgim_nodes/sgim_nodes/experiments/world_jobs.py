@@ -64,8 +64,12 @@ class Probe:
         return f"{self.kind}-seed{self.seed}"
 
     def fingerprint(self) -> fp.Fingerprint:
+        """Its settings and the probes' code: another way of measuring is another result."""
+        from sgim_nodes.experiments import world_probes
+
         return fp.fingerprint({"maker": "world", "probe": self.kind, "seed": self.seed,
-                               "actions": self.actions, "attempts": self.attempts})
+                               "actions": self.actions, "attempts": self.attempts,
+                               "probe_code": fp.source_digest([Path(world_probes.__file__)])})
 
 
 def _count(value: Any) -> bool:
