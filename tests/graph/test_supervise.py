@@ -150,6 +150,19 @@ def test_a_deadline_past_a_recorded_run_ends_with_the_runs_own_exit_code(python_
     assert child.wait(timeout=120) == 130
 
 
+def test_without_posix_timers_a_deadline_still_ends_the_process(python_child, tmp_path):
+    """Where the C library has no timer_create, faulthandler ends the process (with 1)."""
+    child = python_child("""\
+        def no_timers(seconds, code):
+            raise AttributeError("timer_create")
+        supervise._exit_later = no_timers
+        with supervise.hard_deadline(1.0, exit_code=0):
+            re.match(r"(a+)+$", "a" * 40 + "b")
+        """)
+    assert child.wait(timeout=120) == 1
+    assert "Timeout (0:00:01)!" in (tmp_path / "launcher.log").read_text()
+
+
 def test_a_block_that_ends_in_time_disarms_its_deadline(python_child, tmp_path):
     child = python_child("""\
         with supervise.hard_deadline(0.5):

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import TextIO
 
 from sgim_nodes.graph.description import ARBITER, MAX_RESPAWNS, RECORDER, NodeSpec
+from sgim_nodes.graph.exit_timer import exit_later as _exit_later
 
 ARBITER_EXIT_WAIT = 60.0  # seconds for the arbiter to exit after its final status
 # The recorder ends by itself once the movements up to the final count are in and the graph
@@ -130,8 +131,12 @@ def hard_deadline(seconds: float, exit_code: int = 1):
     stream = _stack_file()
     with contextlib.suppress(OSError, ValueError):
         stream.flush()
-    faulthandler.dump_traceback_later(seconds, exit=False, file=stream)
-    disarm = _exit_later(seconds + STACKS_MARGIN, exit_code)
+    try:
+        disarm = _exit_later(seconds + STACKS_MARGIN, exit_code)
+        faulthandler.dump_traceback_later(seconds, exit=False, file=stream)
+    except (OSError, AttributeError):  # no POSIX timers here: faulthandler exits, with 1
+        disarm = _nothing
+        faulthandler.dump_traceback_later(seconds, exit=True, file=stream)
     try:
         yield
     finally:
@@ -142,37 +147,8 @@ def hard_deadline(seconds: float, exit_code: int = 1):
 STACKS_MARGIN = 0.5  # seconds between the stacks written and the exit
 
 
-def _exit_later(seconds: float, code: int) -> Callable[[], None]:
-    """End the process with `code` after `seconds` from a thread the C library starts
-    (POSIX timer_create, SIGEV_THREAD, calling _exit): no Python runs on the way. Returns
-    what disarms it."""
-    import ctypes
-
-    class SigVal(ctypes.Union):
-        _fields_ = [("sival_int", ctypes.c_int), ("sival_ptr", ctypes.c_void_p)]
-
-    class SigEvent(ctypes.Structure):  # glibc's struct sigevent, 64 bytes on 64-bit Linux
-        _fields_ = [("sigev_value", SigVal), ("sigev_signo", ctypes.c_int),
-                    ("sigev_notify", ctypes.c_int), ("function", ctypes.c_void_p),
-                    ("attributes", ctypes.c_void_p), ("_pad", ctypes.c_byte * 32)]
-
-    class TimeSpec(ctypes.Structure):
-        _fields_ = [("tv_sec", ctypes.c_long), ("tv_nsec", ctypes.c_long)]
-
-    libc = ctypes.CDLL(None, use_errno=True)  # timer_create is in glibc's libc since 2.34
-    event = SigEvent(sigev_value=SigVal(sival_int=code), sigev_notify=2,  # SIGEV_THREAD
-                     function=ctypes.cast(libc._exit, ctypes.c_void_p))
-    timer = ctypes.c_void_p()
-    if libc.timer_create(1, ctypes.byref(event), ctypes.byref(timer)) != 0:  # CLOCK_MONOTONIC
-        raise OSError(ctypes.get_errno(), "timer_create failed")
-    whole = int(seconds)
-    setting = (TimeSpec * 2)(TimeSpec(0, 0), TimeSpec(whole, int((seconds - whole) * 1e9)))
-    libc.timer_settime(timer, 0, setting, None)
-
-    def disarm() -> None:
-        libc.timer_delete(timer)
-
-    return disarm
+def _nothing() -> None:
+    pass
 
 
 @contextlib.contextmanager
