@@ -19,8 +19,7 @@ from sgim_nodes.experiments.reports import Report
 FIGURE = "sim_random_casts.png"
 PAPER_NOISE = 0.073  # Nguyen et al. 2011, their rig's noise with this protocol
 CROWD_RADIUS = 0.2  # normalised units: the natural landing zone's ball
-GRID = (26, 16)  # the reachable map's cells (sim_bridge/data_files.py)
-RARE_SHARE = 0.1
+RARE_SHARE = 0.1  # of the reachable map's cells (sim_bridge/tools/map_reachable.py's GRID)
 
 
 def make(experiment: Experiment, runs_dir: Path, figures_dir: Path) -> Report:
@@ -35,8 +34,9 @@ def make(experiment: Experiment, runs_dir: Path, figures_dir: Path) -> Report:
     page = experiment.pages[0]
     if "casts" in made:
         points = np.concatenate([found["points"] for _, found in made["casts"]])
-        report.add(page, "random-casts", random_casts(points))
-        report.figures.append(histogram(points, figures_dir / FIGURE))
+        water = _water(points)
+        report.add(page, "random-casts", random_casts(points, water))
+        report.figures.append(histogram(points, water, figures_dir / FIGURE))
     probes = [learnability_row(kind, made[kind]) for kind in ("sensitivity", "time_step")
               if kind in made]
     if probes:
@@ -58,12 +58,6 @@ def _water(points: np.ndarray) -> np.ndarray:
     return water
 
 
-def _outcomes(points: np.ndarray) -> np.ndarray:
-    from sim_bridge.scaling import world_to_outcome
-
-    return np.asarray([world_to_outcome(p) for p in points], float).reshape(-1, 2)
-
-
 def densest(points: np.ndarray, radius: float = CROWD_RADIUS) -> tuple[np.ndarray, float]:
     """The most crowded `radius` ball centred on one of the points (at most 2000 centres
     tried, evenly spread), and the share of the points in it."""
@@ -77,28 +71,26 @@ def densest(points: np.ndarray, radius: float = CROWD_RADIUS) -> tuple[np.ndarra
 
 
 def rarest_cells(points: np.ndarray, reachable: np.ndarray) -> tuple[float, int]:
-    """The share of `points` in the rarest RARE_SHARE of the GRID cells that reachable
-    outcomes fill, and how many cells that is."""
-    nx, ny = GRID
+    """The share of `points` in the rarest RARE_SHARE of the reachable map's grid cells that
+    reachable outcomes fill, and how many cells that is."""
+    from sim_bridge.tools.map_reachable import GRID, cell_index
 
-    def cell(p: np.ndarray) -> np.ndarray:
-        ix = np.clip(((p[:, 0] + 1) / 2 * nx).astype(int), 0, nx - 1)
-        iy = np.clip(((p[:, 1] + 1) / 2 * ny).astype(int), 0, ny - 1)
-        return ix * ny + iy
-
-    filled = np.unique(cell(reachable))
-    counts = np.bincount(cell(points), minlength=nx * ny)[filled]
+    filled = np.unique(cell_index(reachable))
+    counts = np.bincount(cell_index(points), minlength=GRID[0] * GRID[1])[filled]
     k = max(1, round(RARE_SHARE * len(filled)))
     return float(np.sort(counts, kind="stable")[:k].sum() / len(points)), k
 
 
-def random_casts(points: np.ndarray) -> str:
+def random_casts(points: np.ndarray, water: np.ndarray) -> str:
+    """The shares of `points` (world metres) on water (`water`), on land and never down; the
+    natural landing zone; the rarely reached cells."""
     from sim_bridge.data_files import load_reachable_map
+    from sim_bridge.scaling import world_to_outcome
+    from sim_bridge.tools.map_reachable import GRID
 
     n = len(points)
     down = np.isfinite(points[:, 0])
-    water = _water(points)
-    landed = _outcomes(points[water])
+    landed = world_to_outcome(points[water])
     centre, share = densest(landed)
     rare, cells = rarest_cells(landed, np.asarray(load_reachable_map(), float))
     rows = ["| what | figure |", "|---|---|",
@@ -113,7 +105,7 @@ def random_casts(points: np.ndarray) -> str:
     return "\n".join(rows)
 
 
-def histogram(points: np.ndarray, path: Path) -> Path:
+def histogram(points: np.ndarray, water: np.ndarray, path: Path) -> Path:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -121,8 +113,9 @@ def histogram(points: np.ndarray, path: Path) -> Path:
 
     from sim_bridge.data_files import ISOLATED_REGION
     from sim_bridge.lake import draw_shoreline
+    from sim_bridge.scaling import world_to_outcome
 
-    landed = _outcomes(points[_water(points)])
+    landed = world_to_outcome(points[water])
     fig, ax = plt.subplots(figsize=(6.4, 5.4))
     hist = ax.hist2d(landed[:, 0], landed[:, 1], bins=[52, 52], range=[[-1, 1], [-1, 1]],
                      cmap="viridis", cmin=1)
@@ -142,12 +135,16 @@ def histogram(points: np.ndarray, path: Path) -> Path:
 
 
 def learnability_row(kind: str, made: list) -> str:
+    from sgim_nodes.experiments.world_probes import DELTA
+    from sim_bridge.fishing_world import DEFAULT_TIME_STEP
+    from sim_bridge.scaling import ACTION_DIM
+
     shifts = np.concatenate([found["values"] for _, found in made])
-    jobs = [job for job, _ in made]
-    actions = sum(job.actions for job in jobs)
-    what = (f"one action number moved by 0.001, noise off ({actions} actions x 24 numbers)"
-            if kind == "sensitivity" else
-            f"the time step halved, 1/240 -> 1/480 s, noise off ({actions} actions)")
+    actions = sum(job.actions for job, _ in made)
+    step = round(1 / DEFAULT_TIME_STEP)
+    what = (f"one action number moved by {DELTA:g}, noise off ({actions} actions x "
+            f"{ACTION_DIM} numbers)" if kind == "sensitivity" else
+            f"the time step halved, 1/{step} -> 1/{2 * step} s, noise off ({actions} actions)")
     return (f"| {what} | {len(shifts)} | **{np.median(shifts):.4f}** | "
             f"**{np.percentile(shifts, 90):.4f}** | {shifts.max():.3f} |")
 
