@@ -42,6 +42,16 @@ def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object:
     return make_scheduler(config, log)
 
 
+@pytest.hookimpl(optionalhook=True)
+def pytest_handlecrashitem(crashitem: str, report: pytest.TestReport, sched: object) -> None:
+    """A test whose worker died fails with the signal that ended it, not only 'crashed'."""
+    from tests.scheduling import DEATHS
+
+    death = DEATHS.pop(crashitem, None)
+    if death:
+        report.longrepr = f"{report.longrepr} ({death}): its worker died in this test"
+
+
 def pytest_sessionfinish(session: pytest.Session) -> None:
     """A worker hands its fuzz counts to the controller, which prints the summary."""
     workeroutput = getattr(session.config, "workeroutput", None)

@@ -10,10 +10,18 @@ xdist's loadgroup), so a failure is named as before and `./test.sh <that id>` ru
 Units start longest first (SECONDS: about what each took in a `--durations=0` run on 2
 cores), so that the two longest run side by side on the two workers and no long unit is left
 for the end while the other worker idles. A file not listed counts as short.
+
+A worker that dies mid-test (a segmentation fault in a C extension, a kill) fails that test
+by name with the signal that ended it. The rest of its units go back to the front of the
+queue for the worker that replaces it, or for the others; units it had finished stay done.
+xdist's own scope scheduling re-sends a dead worker's finished units as empty batches that
+no worker ever answers, and re-runs the crashing test until its restarts run out: the suite
+hung, so this module does not leave a crash to it.
 """
 
 from __future__ import annotations
 
+import signal
 from collections import Counter
 from typing import Any
 
@@ -148,5 +156,69 @@ def make_scheduler(config: Any, log: Any) -> Any:
                 self.workqueue.update(units)
             super()._assign_work_unit(node)
 
+        def _reschedule(self, node: Any) -> None:
+            super()._reschedule(node)
+            # A worker holds back its last test until it gets another or is told to stop, so
+            # a worker with one test to run (a replacement given a dead worker's last test)
+            # gets a second, or is told to stop once nothing is left to send.
+            while (self.workqueue and not node.shutting_down
+                   and self._pending_of(self.assigned_work[node]) < 2):
+                self._assign_work_unit(node)
+            if not self.workqueue and not node.shutting_down:
+                node.shutdown()
+
+        def remove_node(self, node: Any) -> str | None:
+            """A worker left: at the end of its work, or dead. Returns the test it died in."""
+            workload = self.assigned_work.pop(node)
+            crashed = first_unfinished(workload)
+            if crashed is None:
+                return None
+            DEATHS[crashed] = death_of(node)
+            workload[self._split_scope(crashed)][crashed] = True  # failed, never run again
+            requeue(self.workqueue, workload)
+            for other in self.assigned_work:
+                self._reschedule(other)
+            return crashed
+
     config.option.loadscopereorder = False
     return Scheduling(config, log)
+
+
+# What ended each worker that died, by the test it died in, for its failure's message.
+DEATHS: dict[str, str] = {}
+
+
+def first_unfinished(workload: dict[str, dict[str, bool]]) -> str | None:
+    """The test a worker was running when it died: its first unfinished one, as a worker runs
+    its units' tests in the order they were sent."""
+    for unit in workload.values():
+        for nodeid, finished in unit.items():
+            if not finished:
+                return nodeid
+    return None
+
+
+def requeue(queue: dict[str, dict[str, bool]], workload: dict[str, dict[str, bool]]) -> None:
+    """Put a dead worker's unfinished units back at the front of the queue, in their order;
+    its finished units stay done (sent again, they would be an empty batch never answered)."""
+    unfinished = [(unit, tests) for unit, tests in workload.items() if not all(tests.values())]
+    for unit, tests in reversed(unfinished):
+        queue[unit] = tests
+        queue.move_to_end(unit, last=False)  # type: ignore[attr-defined]
+
+
+def death_of(node: Any, wait_s: float = 2.0) -> str:
+    """How a dead worker's process ended: 'killed by SIGSEGV', 'exit code 3', or 'ended'."""
+    popen = getattr(getattr(getattr(node, "gateway", None), "_io", None), "popen", None)
+    if popen is None:
+        return "ended"
+    try:
+        code = popen.wait(timeout=wait_s)
+    except Exception:
+        return "ended"
+    if code < 0:
+        try:
+            return f"killed by {signal.Signals(-code).name}"
+        except ValueError:
+            return f"killed by signal {-code}"
+    return f"exit code {code}"
