@@ -11,6 +11,9 @@ section addressed to this node, and every `-p` name, must be declared by it. Nam
 are shared by a whole graph (the run scripts give every node one file), so a node cannot tell a
 typo there from another node's parameter: the launcher checks those against the whole graph.
 
+`BriefParser` is the argparse parser of every command of the project: a refusal is the one
+line that says what is wrong, not the usage before it.
+
 Every parameter file is read here, by the nodes and by the launcher alike (`read_parameter_file`,
 and `parse_yaml` for a sweep file or a `--param` value): UTF-8 YAML, where a key given twice
 in one mapping is refused (PyYAML and rcl would silently keep the last) and so is an alias
@@ -19,9 +22,10 @@ in one mapping is refused (PyYAML and rcl would silently keep the last) and so i
 
 from __future__ import annotations
 
+import argparse
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import yaml
 
@@ -76,6 +80,21 @@ def shown(text: object) -> str:
     another character that does not print)."""
     text = str(text)
     return text if text.isprintable() else repr(text)
+
+
+def one_line(text: str) -> str:
+    """`text` with its unprintable characters escaped: a newline or a carriage return in an
+    argument quoted as given would split the line that says what was refused."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
+class BriefParser(argparse.ArgumentParser):
+    """argparse, whose refusal is one line, `PROG: error: MESSAGE (see PROG --help)`, exit
+    code 2: argparse's own prints the whole usage first (a dozen lines for the launcher), and
+    the line that matters is lost under it. Subcommands' parsers are of this class too."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {one_line(message)} (see {self.prog} --help)\n")
 
 
 class YamlProblem(ValueError):

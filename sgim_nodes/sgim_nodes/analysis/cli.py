@@ -40,6 +40,7 @@ from sgim_nodes.analysis.statistics import (
     demonstration_times,
 )
 from sgim_nodes.analysis.study import CACHE_NAME, Study, discover_runs, load_study
+from sgim_ros.command_line import BriefParser
 from sim_bridge.lake import ISOLATED_REGION
 
 FRAME_FRACTIONS = (0.2, 0.5, 1.0)  # the paper's 1000, 2500 and 5000 of 5000 movements
@@ -74,7 +75,7 @@ and 95 % intervals beside them and the smallest p each test can reach at its n."
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
+    parser = BriefParser(
         prog="analyze", description=DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog="example: analyze runs/study --times 1000 2500 5000")

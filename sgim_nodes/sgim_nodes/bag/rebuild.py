@@ -20,7 +20,6 @@ A run folder (run_experiment.sh's, with bag/ and maybe bag.resume1/, ...) is rea
 
 from __future__ import annotations
 
-import argparse
 import ast
 import sys
 import warnings
@@ -46,6 +45,7 @@ from sgim_nodes.core.learners import DEMONSTRATION, region_tree_for
 from sgim_nodes.core.memory import Memory
 from sgim_nodes.core.region_tree import RegionTree
 from sgim_nodes.core.scale import WorldScale, unit_box
+from sgim_ros.command_line import BriefParser
 
 PROCESS_EVALUATION = PROCESS_CODES["evaluation"]  # never stored in memory
 STATUS_OK = Status.OK
@@ -188,7 +188,7 @@ def _config(settings: list[str]) -> LearnerConfig:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
+    parser = BriefParser(
         prog="rebuild", description="Rebuild the learner's memory and region tree from a "
         "run's bag and print a summary.")
     parser.add_argument("bag", type=Path, help="bag directory, one .mcap / .db3 file, or a run "

@@ -11,7 +11,6 @@ CLI: python -m sgim_nodes.bag.repair BAG_OR_RUN_FOLDER   (a run folder: every se
 
 from __future__ import annotations
 
-import argparse
 import shutil
 import sys
 import warnings
@@ -24,6 +23,7 @@ from sgim_nodes.bag.reader import NotABagError, storage_files
 from sgim_nodes.bag.run_folder import is_run_folder, segments
 from sgim_nodes.bag.types import typestore
 from sgim_nodes.bag.writer import BagWriter
+from sgim_ros.command_line import BriefParser
 
 TRUNCATED_SUFFIX = ".truncated"
 
@@ -77,7 +77,7 @@ def repair(bag: str | Path) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
+    parser = BriefParser(
         prog="repair", description="Rewrite a recording whose recorder was killed as a "
         "complete bag (the original file is kept as .truncated).")
     parser.add_argument("path", type=Path, help="a bag directory, or a run folder (every "

@@ -34,13 +34,14 @@ from sgim_nodes.experiments.pinned import (
 )
 from sgim_nodes.provenance.fingerprint import environment
 from sgim_nodes.provenance.record import Provenance
+from sgim_ros.command_line import BriefParser
 
 FIGURES = REPO / "docs" / "figures"
 
 
 def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     known = ", ".join(p.stem for p in sorted(EXPERIMENTS.glob("*.yaml")))
-    p = argparse.ArgumentParser(
+    p = BriefParser(
         prog="ros_ws/reproduce.sh", description=__doc__.split("\n\n")[0],
         formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog=f"experiments: {known}\nexample: ros_ws/reproduce.sh study --parallel 2")

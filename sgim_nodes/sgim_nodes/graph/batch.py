@@ -35,6 +35,7 @@ from sgim_nodes.graph.description import RunOptions, parameters
 from sgim_nodes.graph.overrides import parse_assignments
 from sgim_nodes.graph.processes import ProcessGroup
 from sgim_nodes.graph.run_folder import RunFolderError, RunLock
+from sgim_ros.command_line import BriefParser
 from sgim_ros.params import SEED_MAX, ParameterError
 
 REPO = Path(__file__).resolve().parents[3]
@@ -74,7 +75,7 @@ def finished(folder: Path) -> bool:
 
 
 def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(
+    p = BriefParser(
         prog="ros_ws/run_study.sh",
         description="Run learners x seeds through the node graph (the paper's comparison), "
                     "resumable: finished runs are skipped.")

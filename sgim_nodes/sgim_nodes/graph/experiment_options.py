@@ -15,7 +15,7 @@ from pathlib import Path
 from sgim_nodes.core.learners import CORE_LEARNER_NAMES as LEARNER_NAMES
 from sgim_nodes.graph.description import STORAGES, TEACHERS
 from sgim_nodes.graph.run_folder import run_name_problem
-from sgim_ros.command_line import shown
+from sgim_ros.command_line import BriefParser, shown
 from sgim_ros.params import SEED_MAX, seed_problem
 
 REPO = Path(__file__).resolve().parents[3]
@@ -62,16 +62,8 @@ def wait_seconds(text: str) -> float:
     return value
 
 
-class OneLineParser(argparse.ArgumentParser):
-    """argparse, whose refusal quotes the argument as given: a newline or a carriage return
-    in it would split the one line that says what was refused."""
-
-    def error(self, message: str):
-        super().error("".join(c if c.isprintable() else repr(c)[1:-1] for c in message))
-
-
 def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
-    p = OneLineParser(
+    p = BriefParser(
         prog="ros_ws/run_experiment.sh",
         description="Run one learner through the ROS 2 node graph and record the run to a bag "
                     "in runs/. Example: ros_ws/run_experiment.sh sgim-d --seed 3 "
@@ -132,8 +124,9 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                         "--prefix 'sim_bridge=valgrind', --prefix 'recorder=prlimit "
                         "--fsize=1000000')")
     p.add_argument("--domain", type=int, default=None,
-                   help="use this ROS_DOMAIN_ID as it is, e.g. to join a graph from a test "
-                        "(default: reserve a free one)")
+                   help="run in this ROS_DOMAIN_ID, e.g. to join a graph from a test; "
+                        "refused while another run holds it (default: a free one, which the "
+                        "run holds until its last process ends)")
     p.add_argument("--timeout", type=float, default=None,
                    help="fail the run after this many seconds (> 0; default: 600 + 0.5 per "
                         "movement, 3100 s for 5000 movements; a day with a human or web "

@@ -33,6 +33,7 @@ from sgim_nodes.sweep import results
 from sgim_nodes.sweep.results import State
 from sgim_nodes.sweep.sweep_file import RunSpec, Sweep, SweepFileError, load
 from sgim_nodes.sweep.task import clean_stale, default_scratch, execute_run, worker_commit
+from sgim_ros.command_line import BriefParser
 
 HEAD_RESOURCE = "node:__internal_head__"
 
@@ -58,7 +59,7 @@ class Board:
 
 
 def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(
+    p = BriefParser(
         prog="ros_ws/run_sweep.sh",
         description="Expand a sweep file into runs and make each one through the node graph "
                     "as a Ray task, here or on a Ray cluster; resumable (finished runs are "

@@ -23,6 +23,7 @@ import argparse
 
 import numpy as np
 
+from sgim_ros.command_line import BriefParser
 from sim_bridge import scaling
 from sim_bridge.data_files import load_reachable_map
 from sim_bridge.lake import DEFAULT_LAKE, Lake, lake_with_pond_radius
@@ -85,7 +86,7 @@ def validation_goals(reached: np.ndarray, lake: Lake = DEFAULT_LAKE) -> np.ndarr
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__,
+    parser = BriefParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--reachable", default=None, help="map .npz (default: the stored one)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the goal draws")

@@ -30,6 +30,7 @@ import math
 import numpy as np
 from tqdm import tqdm
 
+from sgim_ros.command_line import BriefParser
 from sim_bridge.data_files import (
     load_benchmark_goals,
     load_floor,
@@ -140,7 +141,7 @@ def save_png(path: str, floor_path: str | None = None, goals_path: str | None = 
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__,
+    parser = BriefParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--reachable", default=None, help="map .npz (default: the stored one)")
     parser.add_argument("--goals", default=None, help="benchmark .npz (default: the stored one)")

@@ -33,6 +33,7 @@ import argparse
 import numpy as np
 from tqdm import tqdm
 
+from sgim_ros.command_line import BriefParser
 from sim_bridge.data_files import load_reachable_casts
 from sim_bridge.fishing_world import FishingWorld, Status
 from sim_bridge.lake import DEFAULT_LAKE, Lake, lake_with_pond_radius
@@ -120,7 +121,7 @@ def teaching_set(actions: np.ndarray, outcomes: np.ndarray, grid: tuple[int, int
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__,
+    parser = BriefParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--reachable", default=None, help="map .npz (default: the stored one)")
     parser.add_argument("--grid", type=int, nargs=2, default=GRID, help="cells in x and y")

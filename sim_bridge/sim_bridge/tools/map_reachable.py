@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from sgim_ros.command_line import BriefParser
 from sim_bridge.data_files import ACTION_SCALE
 from sim_bridge.fishing_world import FishingWorld, Status
 from sim_bridge.lake import DEFAULT_LAKE, Lake, lake_with_pond_radius
@@ -136,7 +137,7 @@ def save_png(outcomes: np.ndarray, path: Path, title: str, lake: Lake = DEFAULT_
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__,
+    parser = BriefParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--random", type=int, default=10000, help="uniform random casts")
     parser.add_argument("--spread", type=int, default=6000, help="casts spread from sparse cells")

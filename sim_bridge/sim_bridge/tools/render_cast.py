@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from sgim_ros.command_line import BriefParser
 from sim_bridge.data_files import load_teaching_set
 from sim_bridge.fishing_world import Status, validate_action
 from sim_bridge.render import FPS, render_cast, save_gif
@@ -63,7 +64,7 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="render_cast", description=__doc__.split("\n\n")[0])
+    p = BriefParser(prog="render_cast", description=__doc__.split("\n\n")[0])
     source = p.add_mutually_exclusive_group(required=True)
     source.add_argument("--action", metavar="FILE", help="YAML/JSON file with 24 numbers")
     source.add_argument("--teaching-index", type=int, metavar="N",
