@@ -12,7 +12,12 @@ from pathlib import Path
 
 import pytest
 
-from sgim_nodes.graph.domain import isolated_ros_environment, reserve_domain
+from sgim_nodes.graph.domain import (
+    DomainInUse,
+    hold_run_domain,
+    isolated_ros_environment,
+    reserve_domain,
+)
 from sgim_nodes.graph.processes import ProcessGroup, group_is_empty
 
 
@@ -22,6 +27,44 @@ def test_reservations_never_share_a_domain():
     # Released: the same id can be had again.
     with reserve_domain(preferred=first.domain_id) as again:
         assert again.domain_id == first.domain_id
+
+
+def test_a_run_holds_its_domain_whoever_chose_it():
+    """One run per domain: a second run naming it is refused in one line, a run that picks
+    its own never takes it, and a domain a caller reserved can be lent to one run."""
+    with hold_run_domain() as first:
+        with pytest.raises(DomainInUse, match=rf"^ROS domain {first.domain_id} is held by "
+                                              r"another run on this host: leave out --domain"):
+            hold_run_domain(first.domain_id)
+        with hold_run_domain() as second:
+            assert second.domain_id != first.domain_id
+    with reserve_domain() as lent:  # a test session's domain, named by its runs' --domain
+        with hold_run_domain(lent.domain_id) as run:
+            assert run.domain_id == lent.domain_id
+            with pytest.raises(DomainInUse):
+                hold_run_domain(lent.domain_id)
+            with reserve_domain(preferred=lent.domain_id) as other:
+                assert other.domain_id != lent.domain_id
+        with hold_run_domain(lent.domain_id) as next_run:  # released: the next run may
+            assert next_run.domain_id == lent.domain_id
+    with hold_run_domain(first.domain_id) as named, hold_run_domain() as picked, \
+            reserve_domain(preferred=named.domain_id) as pool:  # a named one leaves the pool
+        assert named.domain_id not in (picked.domain_id, pool.domain_id)
+
+
+def test_a_run_s_domain_is_held_by_any_process_that_inherited_it():
+    held = hold_run_domain()
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"],
+                             pass_fds=held.fds)
+    try:
+        held.release()
+        with pytest.raises(DomainInUse):
+            hold_run_domain(held.domain_id)
+    finally:
+        child.kill()
+        child.wait()
+    with hold_run_domain(held.domain_id) as again:
+        assert again.domain_id == held.domain_id
 
 
 def test_bad_preferred_domain_is_refused():

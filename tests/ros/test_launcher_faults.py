@@ -68,7 +68,7 @@ def finish(launcher: subprocess.Popen, timeout: float) -> str:
 
 def test_a_killed_launcher_leaves_no_node_and_holds_its_domain_until_they_end(
         ros_processes, tmp_path):
-    from sgim_nodes.graph.domain import reserve_domain
+    from sgim_nodes.graph.domain import DomainInUse, hold_run_domain, reserve_domain
 
     run_dir = tmp_path / "killed"
     # The evaluator's process lingers 4 s after its node ends (a slow shutdown), holding what
@@ -87,6 +87,8 @@ def test_a_killed_launcher_leaves_no_node_and_holds_its_domain_until_they_end(
         with reserve_domain(preferred=domain) as other:
             if run_node_pids(run_dir):  # a process of the run still lives: not ours to take
                 assert other.domain_id != domain
+                with pytest.raises(DomainInUse):  # nor another run's, named by --domain
+                    hold_run_domain(domain)
                 held += 1
         assert time.monotonic() < deadline, f"left behind: {run_node_pids(run_dir)}"
         time.sleep(0.1)
@@ -108,6 +110,30 @@ def test_a_killed_launcher_leaves_no_node_and_holds_its_domain_until_they_end(
     assert first.returncode == 0, output[-3000:]
     assert "ended without recording an outcome: it was killed" in output
     assert metadata(run_dir)["outcome"] == "finished"
+
+
+def test_a_second_run_asking_for_a_run_s_domain_is_refused(ros_processes, tmp_path):
+    """Two runs on one domain would mix their records: the second is refused in one line
+    before it makes anything, and the first runs on alone to its budget."""
+    first_dir = tmp_path / "first"
+    first = launch(ros_processes, "run-first", "random", "--movements", "150",
+                   "--eval-every", "0", "--runs-dir", str(tmp_path), "--name", "first",
+                   "--quiet")
+    wait_for(lambda: progress(first_dir) > 0, 120, "the first run to make movements")
+    domain = metadata(first_dir)["ros_domain_id"]
+    second = subprocess.run(
+        [RUN, "random", "--movements", "150", "--eval-every", "0", "--runs-dir",
+         str(tmp_path), "--name", "second", "--quiet", "--domain", str(domain)],
+        capture_output=True, text=True, timeout=120)
+    said = (second.stdout + second.stderr).strip().splitlines()
+    assert second.returncode == 2, said
+    assert len(said) == 1 and f"ROS domain {domain} is held by another run" in said[0], said
+    assert not (tmp_path / "second").exists()
+    output = finish(first, 300)
+    assert first.returncode == 0, output[-3000:]
+    meta = metadata(first_dir)
+    assert meta["outcome"] == "finished" and meta["movements_done"] == 150
+    assert meta["quarantine"]["total"] == 0, meta["quarantine"]
 
 
 def test_ctrl_c_with_output_piped_stops_every_node(ros_processes, tmp_path):

@@ -5,6 +5,11 @@ A domain is held by binding a loopback TCP port derived from it for as long as t
 reservation lives; the operating system frees it when the last process holding the socket
 dies, so a crashed run never leaks a reservation, and a run whose nodes inherited the socket
 keeps its domain until its last node is gone.
+
+A run holds one more lock beside it, its run lock (hold_run_domain): one run per domain,
+whether the launcher chose the domain or `--domain` named it. A domain named by `--domain`
+may be one that its caller reserved and lends (a test session starting its runs), so the run
+lock, not the pool's port, is what refuses a second run.
 """
 
 from __future__ import annotations
@@ -22,21 +27,39 @@ FIRST_DOMAIN = 1
 LAST_DOMAIN = 100  # Fast DDS accepts 0-232 on Linux; 1-100 leaves room for other tools
 
 
+RUN_LOCK = "sgim-ros-run-in-domain-{}"
+"""The name of a domain's run lock: a socket in Linux's abstract namespace, which no file
+holds and which the kernel frees with the last process that inherited it."""
+
+
+class DomainInUse(RuntimeError):
+    """The domain asked for is held by another run on this host."""
+
+
 @dataclass
 class DomainReservation:
     """A reserved domain id; release() or process exit frees it."""
 
     domain_id: int
-    _socket: socket.socket = field(repr=False)
+    _socket: socket.socket | None = field(repr=False)
+    _run_lock: socket.socket | None = field(default=None, repr=False)
 
     @property
     def fd(self) -> int:
-        """The reservation's descriptor: a child process that inherits it holds the domain
-        until it ends too."""
+        """The pool reservation's descriptor: a child process that inherits it holds the
+        domain until it ends too."""
+        assert self._socket is not None, "this run's domain is lent by its caller"
         return self._socket.fileno()
 
+    @property
+    def fds(self) -> tuple[int, ...]:
+        """Every descriptor that holds the domain, for a run's processes to inherit."""
+        return tuple(s.fileno() for s in (self._socket, self._run_lock) if s is not None)
+
     def release(self) -> None:
-        self._socket.close()
+        for sock in (self._socket, self._run_lock):
+            if sock is not None:
+                sock.close()
 
     def __enter__(self) -> DomainReservation:
         return self
@@ -64,6 +87,54 @@ def reserve_domain(preferred: int | None = None) -> DomainReservation:
     raise RuntimeError(
         f"no free ROS domain in {FIRST_DOMAIN}..{LAST_DOMAIN}: too many runs on this host?"
     )
+
+
+def _bind_run_lock(domain_id: int) -> socket.socket | None:
+    sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    try:
+        sock.bind("\0" + RUN_LOCK.format(domain_id))
+    except OSError:
+        sock.close()
+        return None
+    return sock
+
+
+def _bind_pool_port(domain_id: int) -> socket.socket | None:
+    sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    try:
+        sock.bind(("127.0.0.1", PORT_BASE + domain_id))
+    except OSError:
+        sock.close()
+        return None
+    return sock
+
+
+def hold_run_domain(requested: int | None = None) -> DomainReservation:
+    """The domain a run holds for as long as any of its processes lives: ``requested`` (the
+    launcher's `--domain`), or a free one of the pool. DomainInUse when another run holds
+    ``requested``, in one line that says what to do."""
+    if requested is not None:
+        if not 0 <= requested <= 232:
+            raise ValueError(f"ROS_DOMAIN_ID must be in 0..232, got {requested}")
+        run_lock = _bind_run_lock(requested)
+        if run_lock is None:
+            raise DomainInUse(f"ROS domain {requested} is held by another run on this host: "
+                              "leave out --domain to get a free one")
+        # Taken from the pool too when free, so that no launcher picks it meanwhile; when the
+        # pool's port is held, the caller that reserved it lends it to this run.
+        return DomainReservation(requested, _bind_pool_port(requested), run_lock)
+    skipped: list[DomainReservation] = []  # held while the next is tried, then let go
+    try:
+        while True:
+            pooled = reserve_domain()  # RuntimeError once the pool has no free domain
+            run_lock = _bind_run_lock(pooled.domain_id)
+            if run_lock is not None:
+                pooled._run_lock = run_lock
+                return pooled
+            skipped.append(pooled)  # a run named it while its caller held the pool's port
+    finally:
+        for other in skipped:
+            other.release()
 
 
 def isolated_ros_environment(domain_id: int, base: dict[str, str] | None = None) -> dict[str, str]:

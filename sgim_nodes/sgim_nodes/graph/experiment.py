@@ -38,7 +38,12 @@ import yaml
 
 from sgim_nodes.graph import supervise
 from sgim_nodes.graph.description import ARBITER, RECORDER, NodeSpec
-from sgim_nodes.graph.domain import isolated_ros_environment, reserve_domain
+from sgim_nodes.graph.domain import (
+    DomainInUse,
+    DomainReservation,
+    hold_run_domain,
+    isolated_ros_environment,
+)
 from sgim_nodes.graph.experiment_options import REPO, default_timeout, parse_args
 from sgim_nodes.graph.plan import Plan, plan_new, plan_resume
 from sgim_nodes.graph.processes import ProcessGroup
@@ -68,6 +73,21 @@ def prefixes(items: Sequence[str], nodes: Sequence[NodeSpec]) -> dict[str, list[
 
 
 def run(args: argparse.Namespace) -> int:
+    try:  # before the run folder is made: a refused run leaves nothing behind
+        reservation = hold_run_domain(args.domain)
+    except DomainInUse as error:
+        say(str(error))
+        return 2
+    except RuntimeError as error:  # no free domain on this host
+        say(f"failed: {error}")
+        return 1
+    try:
+        return plan_and_launch(args, reservation)
+    finally:
+        reservation.release()
+
+
+def plan_and_launch(args: argparse.Namespace, reservation: DomainReservation) -> int:
     try:
         if args.resume is not None:
             refuse_full_disk(args.resume)
@@ -85,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
         say(f"failed: {write_failure(error)}")
         return 1
     try:
-        return launch(args, plan)
+        return launch(args, plan, reservation)
     except OSError as error:  # what launch writes before any node starts
         say(f"failed: {write_failure(error)}; nothing was started")
         return 1
@@ -126,7 +146,7 @@ def refuse_full_disk(run_dir: Path) -> None:
                        "on device [ENOSPC]): make room, then --resume again")
 
 
-def launch(args: argparse.Namespace, plan: Plan) -> int:
+def launch(args: argparse.Namespace, plan: Plan, reservation: DomainReservation) -> int:
     try:
         node_prefix = prefixes(args.prefix, plan.nodes)
     except ParameterError as error:
@@ -137,8 +157,7 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
     supervise.OUT.log = open(plan.log_dir / "launcher.log", "a")  # noqa: SIM115
     supervise.stacks_on_request()
     plan.params_file.write_text(yaml.safe_dump(plan.values.to_yaml(), sort_keys=False))
-    reservation = reserve_domain() if args.domain is None else None
-    domain = args.domain if reservation is None else reservation.domain_id
+    domain = reservation.domain_id
     env = isolated_ros_environment(domain)
     os.environ.update(env)  # the launcher's own progress node joins the run's domain
     if plan.record_key:  # to the nodes only, never as a parameter (any peer can read those)
@@ -148,7 +167,7 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
     timeout = args.timeout or default_timeout(args.movements, plan.teacher)
     say(f"{plan.learner}, seed {args.seed}, {args.movements} movements, domain {domain}, "
         f"{len(plan.nodes)} nodes, timeout {timeout:g} s -> {run_dir}")
-    inherited = (plan.lock.fd, *([reservation.fd] if reservation else []))
+    inherited = (plan.lock.fd, *reservation.fds)
     group = ProcessGroup(env=env, log_dir=plan.log_dir, inherited_fds=inherited)
 
     def start(spec: NodeSpec, log_name: str) -> subprocess.Popen:
@@ -199,8 +218,7 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
                 if code == 0 and recorder is not None and recorder.returncode != 0:
                     outcome = f"failed: {supervisor.failure(RECORDER, recorder.returncode)}"
                     code = 1
-                if reservation is not None:
-                    reservation.release()
+                reservation.release()
                 if code > 128:  # the count once the last messages are in
                     outcome += f" at movement {progress.count if progress else plan.done}"
                 meta.update(ended=datetime.now(UTC).isoformat(), outcome=outcome,
@@ -213,6 +231,8 @@ def launch(args: argparse.Namespace, plan: Plan) -> int:
                     write_metadata(run_dir, meta)
                 except OSError as error:  # a full disk: said here, kept by the next resume
                     unwritten = write_failure(error, METADATA)
+                if progress is not None:  # the outcome below goes after the bar, not on it
+                    progress.end_bar()
     if unwritten:
         if outcome.startswith("failed") and disk_is_full(run_dir) is not None \
                 and "ENOSPC" not in outcome:
