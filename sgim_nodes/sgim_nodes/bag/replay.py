@@ -6,13 +6,16 @@ older version, whose type has gained fields since, is first re-encoded as today'
 new fields at their defaults, bag/schema.py), so that today's subscribers decode it; a field
 removed or retyped since, or a type gone, is refused (exit 2) naming the topic and field.
 Records are VOLATILE: a message published before a subscriber matched is gone for it, so
-replay first waits until every topic has --subscribers matched subscriptions (default 1),
-for at most --wait-subscribers seconds, and refuses to play (exit 3, naming the topics) when
-they are not there, unless --play-anyway. State topics (region_map) keep only their latest
-value in the publisher, so each of them is acknowledged before the next is sent, or fast
-replays would skip maps. Damaged bag parts are skipped with a warning (see bag.reader), and
-records that fail validation (bag/validation.py, as every reader) are left out and reported,
-unless --include-quarantined plays them as recorded (an audit of an attack).
+replay first waits, saying so at once, until every topic has --subscribers matched
+subscriptions (default 1), for at most --wait-subscribers seconds. A listener that takes only
+some topics (rviz2 on the markers, a node on /movements) is enough: once no new match has come
+for SETTLE seconds, replay plays, naming the topics nobody hears. With nobody at all it
+refuses to play (exit 3, naming the topics), unless --play-anyway. State topics
+(region_map) keep only their latest value in the publisher, so each of them is acknowledged
+before the next is sent, or fast replays would skip maps. Damaged bag parts are skipped
+with a warning (see bag.reader), and records that fail validation (bag/validation.py, as
+every reader) are left out and reported, unless --include-quarantined plays them as
+recorded (an audit of an attack).
 
 Usage: python -m sgim_nodes.bag.replay BAG [--rate 2.0] [--topics movements goals] [--ros-args ...]
 """
@@ -30,13 +33,17 @@ from sgim_nodes.bag.record_checks import Problem
 from sgim_nodes.bag.schema import SchemaError, Upgrader
 from sgim_nodes.bag.types import STATE_TOPICS, TOPICS
 from sgim_nodes.bag.validation import RunValidator, summarise
+from sgim_ros.command_line import BriefParser
 
 ACK_TIMEOUT = 5.0  # seconds to wait at the end for every subscriber to acknowledge
+# Seconds without a new match, once some topics have their subscribers, before the others are
+# taken as unheard: one listener's subscriptions match within a second or two of each other.
+SETTLE = 3.0
 NO_SUBSCRIBERS = 3  # exit code: the expected subscribers never matched
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = BriefParser(
         prog="replay",
         description="Play a bag back onto its topics, keeping the recorded time gaps / RATE. "
                     "A bag of an older version plays as today's messages (fields added "
@@ -52,10 +59,11 @@ def _parser() -> argparse.ArgumentParser:
                         help="matched subscriptions every topic must have before playing "
                              "(default 1; 0: do not wait)")
     parser.add_argument("--wait-subscribers", type=float, default=30.0, metavar="SECONDS",
-                        help="how long to wait for them (default 30); then replay refuses, "
-                             f"exit {NO_SUBSCRIBERS}")
+                        help="how long to wait for them (default 30); then replay plays to "
+                             "the topics that have them, or refuses when none has, exit "
+                             f"{NO_SUBSCRIBERS}")
     parser.add_argument("--play-anyway", action="store_true",
-                        help="play even if the subscribers did not all match in time")
+                        help="play even if nobody subscribes (e.g. rviz2 started later)")
     parser.add_argument("--include-quarantined", action="store_true",
                         help="also play records that fail validation (exactly as recorded)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -99,13 +107,22 @@ def load(bag: Path, topics: list[str] | None, include_quarantined: bool = False
     return kept
 
 
-def wait_for_subscribers(pubs: dict, wanted: int, timeout: float, ok) -> list[str]:
-    """Wait until every publisher has `wanted` matched subscriptions; the topics that lack
-    them when `timeout` runs out (empty when all matched)."""
+def wait_for_subscribers(pubs: dict, wanted: int, timeout: float, ok,
+                         settle: float = SETTLE) -> list[str]:
+    """Wait until every publisher has `wanted` matched subscriptions, or, once some have,
+    until no new one has matched for `settle` seconds; the topics that lack them when it
+    stops (empty when all matched)."""
     deadline = time.monotonic() + timeout
+    matched: set[str] = set()
+    changed = time.monotonic()
     while ok() and time.monotonic() < deadline:
-        if all(p.get_subscription_count() >= wanted for p in pubs.values()):
+        now = {t for t, p in pubs.items() if p.get_subscription_count() >= wanted}
+        if len(now) == len(pubs):
             return []
+        if now != matched:
+            matched, changed = now, time.monotonic()
+        elif matched and time.monotonic() - changed >= settle:
+            break
         time.sleep(0.02)
     return [f"{t} ({p.get_subscription_count()}/{wanted})" for t, p in pubs.items()
             if p.get_subscription_count() < wanted]
@@ -136,8 +153,16 @@ def play(records: list[RawRecord], rate: float, wait_subscribers: float,
         for topic, msgtype in {r.topic: r.msgtype for r in records}.items():
             pubs[topic] = node.create_publisher(ros_message_class(msgtype), topic,
                                                 topic_qos(topic))
+        if subscribers and wait_subscribers and not all(
+                p.get_subscription_count() >= subscribers for p in pubs.values()):
+            print(f"replay: waiting up to {wait_subscribers:g} s for subscribers on the "
+                  f"{len(pubs)} topics (start them now: rviz2, your nodes; --play-anyway "
+                  "--wait-subscribers 0 plays at once)", file=sys.stderr)
         lonely = wait_for_subscribers(pubs, subscribers, wait_subscribers, rclpy.ok)
-        if lonely:
+        if lonely and len(lonely) < len(pubs):  # someone listens: play to them
+            print(f"replay: nobody hears {', '.join(lonely)}; playing to the subscribers of "
+                  "the others", file=sys.stderr)
+        elif lonely:
             if not play_anyway:
                 print(f"replay: after {wait_subscribers:g} s, too few subscribers on "
                       f"{', '.join(lonely)}: not playing (a record published before its "

@@ -104,10 +104,19 @@ class SafeStream:
 
 
 OUT = SafeStream()
+_BAR: list = []  # the progress bar being drawn, if any: say() writes above it
 
 
 def say(message: str) -> None:
-    OUT.write(f"run_experiment: {message}\n")
+    """A line of the launcher's. While the progress bar is drawn, the line goes above it:
+    written after the bar's last carriage return, it would share the bar's line and be drawn
+    over by its next refresh."""
+    line = f"run_experiment: {message}"
+    if _BAR:
+        with contextlib.suppress(Exception):
+            _BAR[-1].write(line, file=OUT)
+            return
+    OUT.write(line + "\n")
 
 
 def _stack_file() -> TextIO:
@@ -232,6 +241,8 @@ class Progress:
         self.seen = done
         self.bar = tqdm(total=total, initial=done, disable=quiet, unit="mv", file=OUT,
                         dynamic_ncols=True)
+        if not quiet:
+            _BAR.append(self.bar)
         self.node.create_subscription(RunStatus, "run_status", self._on_status, qos.RECORDS)
         self.node.create_subscription(Movement, "movements", self._on_movement, qos.RECORDS)
         self.finished_state = (RunStatus.STATE_FINISHED, RunStatus.STATE_ABORTED)
@@ -255,7 +266,15 @@ class Progress:
 
     def say(self, text: str) -> None:
         """A line of the launcher's, above the progress bar."""
-        self.bar.write(f"run_experiment: {text}", file=OUT)
+        say(text)
+
+    def end_bar(self) -> None:
+        """Draw the bar a last time and end its line, so that what follows (the run's
+        outcome) is on lines of its own, after it, and nothing draws over them."""
+        if self.bar in _BAR:
+            _BAR.remove(self.bar)
+        with contextlib.suppress(Exception):
+            self.bar.close()
 
     def spin(self, seconds: float) -> None:
         deadline = time.monotonic() + seconds
@@ -267,8 +286,7 @@ class Progress:
         return self.state in self.finished_state
 
     def close(self) -> None:
-        with contextlib.suppress(Exception):
-            self.bar.close()
+        self.end_bar()
         self.executor.shutdown()
         self.node.destroy_node()
         self.rclpy.try_shutdown(context=self.context)
