@@ -6,7 +6,10 @@ the learner without ROS"). ``install_requires`` lists what the core and its runn
 nodes' ROS dependencies are in package.xml, and colcon installs nothing from this list.
 """
 
+import atexit
+import shutil
 import sys
+import tempfile
 from glob import glob
 
 from setuptools import find_packages, setup
@@ -43,6 +46,18 @@ PIP_SCRIPTS = [
 # would need every colcon build to pass it, and an environment variable every caller to set it.
 COLCON_ROUTE = not {"develop", "install"}.isdisjoint(sys.argv[1:])
 
+
+def outside_the_tree() -> dict[str, dict[str, str]]:
+    """pip's build directories in a temporary folder, removed when the build ends: pip builds
+    in the source folder, where setuptools would leave build/ and the egg-info behind. colcon
+    names its own (in ros_ws/build), so its route keeps setuptools' defaults."""
+    if COLCON_ROUTE:
+        return {}
+    scratch = tempfile.mkdtemp(prefix=f"{PACKAGE}-build-")
+    atexit.register(shutil.rmtree, scratch, ignore_errors=True)
+    return {"build": {"build_base": f"{scratch}/build"}, "egg_info": {"egg_base": scratch}}
+
+
 setup(
     name=PACKAGE,
     version="0.1.0",
@@ -56,6 +71,7 @@ setup(
     python_requires=">=3.11",
     # setuptools: the ament_python template's; numpy, scipy: the core; tqdm: the runner's bar.
     install_requires=["setuptools", "numpy", "scipy", "tqdm"],
+    options=outside_the_tree(),
     zip_safe=False,
     maintainer="SGIM-ROS maintainers",
     maintainer_email="maintainers@sgim-ros.org",
