@@ -331,3 +331,34 @@ def test_a_namespace_without_a_name_gets_the_default_folder(tmp_path):
     plan = plan_new(args)
     plan.lock.release()
     assert plan.run_dir.name.startswith("random-seed0-")
+
+
+# --- rules between learner parameters, and the teacher's wait ---------------------------------
+@pytest.mark.parametrize(("assignments", "message"), [
+    (["zeta=51"], "LearnerConfig.zeta: must be even"),
+    (["zeta=120"], "LearnerConfig.zeta: must not exceed max_goals_per_region"),
+    (["max_goals_per_region=40"], "LearnerConfig.zeta: must not exceed max_goals_per_region"),
+    (["p_mode1=0.5"], "LearnerConfig.p_mode1: p_mode1 + p_mode2 + p_mode3 must equal 1"),
+    (["p_mode1=0.7", "p_mode2=0.2", "p_mode3=0.2"], "p_mode1 + p_mode2 + p_mode3 must equal 1"),
+])
+def test_a_learner_rule_between_parameters_is_refused_before_any_node_starts(
+        capsys, tmp_path, assignments, message):
+    """Each value is within its own range; together they break a rule the reference page
+    states beside the range (ros_glue.LEARNER_TIES)."""
+    err = _refused(capsys, tmp_path, "sgim-d", *(a for x in assignments for a in ("--param", x)))
+    assert message in err and len(err.splitlines()) == 1, err
+
+
+@pytest.mark.parametrize("value", ["0.5", "1.0e-9", "0.0"])
+def test_a_teacher_timeout_shorter_than_the_teachers_casts_is_refused(capsys, tmp_path, value):
+    from sgim_nodes.graph.description import RunOptions, parameters
+    from sgim_nodes.nodes.arbiter_params import TEACHER_TIMEOUT_MIN
+    from sgim_ros.params import ParameterError
+
+    for learner in ("sgim-d", "sgim-acts"):  # a boundary's word, a request's answer
+        with pytest.raises(ParameterError, match=r"'teacher_timeout' = .* it must be >= 1"):
+            parameters(RunOptions(learner, overrides={"teacher_timeout": float(value)}))
+    err = _refused(capsys, tmp_path, "sgim-d", "--param", f"teacher_timeout={value}")
+    assert "parameter 'teacher_timeout'" in err and "must be >= 1" in err, err
+    values = parameters(RunOptions("sgim-d", overrides={"teacher_timeout": TEACHER_TIMEOUT_MIN}))
+    assert values.shared["teacher_timeout"] == TEACHER_TIMEOUT_MIN

@@ -13,7 +13,6 @@ fails while the page is not what this writes.
 
 from __future__ import annotations
 
-import argparse
 import ast
 import itertools
 import sys
@@ -23,13 +22,18 @@ from pathlib import Path
 from typing import Any
 
 from sgim_nodes.graph.description import (
+    ACTS,
     NODES,
     OPTION_PARAMETERS,
     NodeSpec,
+    RunOptions,
+    acts_teachers,
     graph,
     learner_defaults,
+    parameters,
 )
 from sgim_nodes.graph.endpoints import CLIENT_KINDS, REPO, Endpoint, endpoints, source
+from sgim_ros.command_line import BriefParser
 
 COMMAND = "python -m sgim_nodes.graph.reference --write docs/reference.md"
 INTERFACES = REPO / "sgim_msgs"
@@ -78,6 +82,15 @@ def _description(p: Any) -> str:
     return p.description
 
 
+def run_graph(learner: str, teacher: str, markers: bool) -> list[NodeSpec]:
+    """The nodes of a run with the default parameters, as the launcher plans it: SGIM-ACTS's
+    teachers are those its parameters() gives the run (the web page among them with
+    --teacher web)."""
+    options = RunOptions(learner, teacher=teacher, markers=markers)
+    teachers = acts_teachers(parameters(options).shared) if learner == ACTS else None
+    return graph(learner, teacher, markers, teachers)
+
+
 def who_runs(spec: NodeSpec) -> str:
     """Which learners' graphs hold the node, with the teacher or markers it needs."""
     from sgim_nodes.graph.description import LEARNER_NAMES, TEACHERS
@@ -86,7 +99,7 @@ def who_runs(spec: NodeSpec) -> str:
         return any((s.package, s.executable) == (spec.package, spec.executable) for s in nodes)
 
     runs = {(learner, teacher, markers) for learner in LEARNER_NAMES for teacher in TEACHERS
-            for markers in (True, False) if holds(graph(learner, teacher, markers))}
+            for markers in (True, False) if holds(run_graph(learner, teacher, markers))}
     learners = [name for name in LEARNER_NAMES if any(r[0] == name for r in runs)]
     teachers = sorted({r[1] for r in runs}, key=TEACHERS.index)
     if not runs:
@@ -254,7 +267,7 @@ def render(nodes: Sequence[NodeSpec] | None = None) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = BriefParser(description=__doc__.split("\n\n")[0])
     action = parser.add_mutually_exclusive_group(required=True)
     action.add_argument("--write", metavar="FILE", type=Path, help="write the page")
     action.add_argument("--check", metavar="FILE", type=Path,

@@ -13,6 +13,13 @@ from sgim_ros.params import Param, at_least, non_negative, one_of, positive
 from sim_bridge.data_params import TEACHING_SET_FILE
 
 SOCIAL = ("sgim-d", "demo-only")
+TEACHER_TIMEOUT_MIN = 1.0
+"""The shortest wait for a teacher, in seconds. An answer comes only after the teacher has
+heard the movements up to the turn and cast, in its own world, the learner's model for the
+teaching goals it checks (or, for a request, made the demonstration it shows): casts as long
+as the run's own movements, then messages between nodes. A wait shorter than a second ends a
+healthy run at its first turn on a busy machine, and is never what one means: the default is a
+minute, an hour when a person answers."""
 PARAMS = learner_node_params(
     Param("movements", 5000, "the run's movement budget (the paper: 5000)", at_least(1)),
     Param("teacher", "automatic", "who gives demonstrations: automatic (synchronous at its "
@@ -32,9 +39,9 @@ PARAMS = learner_node_params(
           "publishers and the listeners' *_ready services, sgim_ros/ready.py) before the start",
           positive),
     Param("teacher_timeout", 60.0, "seconds to wait for the teacher at a boundary, or for "
-          "the answer to a request (sgim-acts; 3600 when the web page is one of its teachers)",
-          positive,
-          read_only=False),
+          "the answer to a request (sgim-acts; 3600 when the web page is one of its teachers); "
+          "never under a second: a teacher answers only after casting in its own world",
+          at_least(TEACHER_TIMEOUT_MIN), read_only=False),
     Param("call_timeout", 600.0, "seconds to wait for the answer of register_demonstration, "
           "or for the result of a reach_goal or imitate job", positive, read_only=False),
     Param("goals_per_job", 50, "goals one reach_goal job may attempt before it reports back "
