@@ -50,6 +50,20 @@ _WANTED = ("movements", "evaluations", "region_map", "demonstrations", "demonstr
            "run_status", "help_requests", "goals")
 # Parameters that differ from run to run without changing the experiment: the fingerprint's.
 PER_RUN = fingerprint.PER_RUN | fingerprint.OPERATIONAL
+RUN_TIME = frozenset({"linger", "teacher_timeout", "call_timeout", "evaluation_timeout",
+                      "service_timeout", "service_retries", "goal_timeout"})
+"""The parameters the nodes declare changeable while they run (``read_only=False``): how long
+a node waits and how long the web page stays. None changes a movement (a wait too short ends
+the run, it does not alter it), so the fingerprint leaves them out too
+(fingerprint.graph_parameters); tests/analysis/test_pooling_settings.py checks the list
+against the nodes' declarations."""
+SILENT = frozenset({"chunk_seconds", "chunk_messages", "finish_grace", "stop_on_finish",
+                    "full_every", "rate"})
+"""The parameters of the nodes that only record or draw (fingerprint.SILENT_NODES) that no
+other node declares: how the bag is written, how often the markers are drawn."""
+NOT_THE_RUN = PER_RUN | RUN_TIME | SILENT
+"""What two runs may differ in and still be pooled: nothing here changes what the learner
+does."""
 
 Warn = Callable[[str], None]
 
@@ -106,10 +120,11 @@ class RunData:
     @property
     def condition(self) -> dict:
         """What must be equal for two runs to be pooled: learner, teacher, budget and every
-        parameter that is not per run (seed, paths)."""
+        parameter that can change a movement (not the seed, paths, waits or the recording:
+        NOT_THE_RUN)."""
         params = self.metadata.get("parameters")
         params = params if isinstance(params, dict) else {}
-        found = {k: v for k, v in params.items() if k not in PER_RUN}
+        found = {k: v for k, v in params.items() if k not in NOT_THE_RUN}
         found.update(learner=self.learner, movements=self.total_movements)
         if "teacher" in self.metadata:
             found["teacher"] = self.metadata["teacher"]
@@ -384,8 +399,9 @@ def _usual_values(conditions: list[dict], keys: list[str]) -> dict[str, object]:
 
 def group_runs(runs: list[RunData], warn: Warn = _default_warn) -> dict[str, list[str]]:
     """Label each run with the group it may be pooled in; return the groups in which a seed
-    repeats (group -> run names). Runs of a learner that differ in anything but per-run
-    parameters go to separate groups, labelled by the values that tell them apart."""
+    repeats (group -> run names). Runs of a learner that differ in anything but the settings
+    outside the run (NOT_THE_RUN) go to separate groups, labelled by the values that tell
+    them apart."""
     by_learner: dict[str, list[RunData]] = {}
     for run in runs:
         by_learner.setdefault(run.learner, []).append(run)
