@@ -5,8 +5,9 @@ on 127.0.0.1 by default, a page that draws the run as it goes (landings coloured
 the interest tree's leaves coloured by interest, the teaching goals reached or not, the
 current goal, the error curve, the count and the budget) and lets the person demonstrate a
 teaching goal, accept the library's most reliable action for any point, paste 24 numbers,
-and pause, resume or step the run. The decisions are the terminal teacher's
-(human_commands), the picture the markers node's (sgim_nodes.view.picture).
+and pause, resume or step the run (counted where the run stands: web/pacing.py). The
+decisions are the terminal teacher's (human_commands), the picture the markers node's
+(sgim_nodes.view.picture).
 
 Threads: the HTTP server answers in its own threads, reading the picture under one lock;
 whatever touches ROS (publishing, service calls) is queued to the main thread, which spins
@@ -18,7 +19,9 @@ After the run: with `linger` > 0 and a page open (it asked for the state in the 
 the page keeps being served, saying the run is over, until the person closes it there or
 `linger` seconds pass. The launcher waits for that (graph/experiment.py), by two files beside
 `address_file`: the address file is removed once the node heard the end of the run (at once
-when it does not linger), and `web_teacher.linger` exists while it lingers.
+when it does not linger), and `web_teacher.linger` exists while it lingers. Once the node's
+ROS context is shut down, every request about the run is answered 503 "the run is over"
+until the server stops (web/server.py).
 
 Interfaces:
   topics    movements, region_map, goals, evaluations, demonstrations, run_status,
@@ -63,7 +66,8 @@ from teacher.human_decisions import (
 )
 from teacher.web.app import WebTeacher
 from teacher.web.cast_pictures import CastRenderer, lake_png
-from teacher.web.server import Api, Refused, serve
+from teacher.web.pacing import SETTLE, PacePlan, PaceReply, Request
+from teacher.web.server import RUN_OVER, Api, Refused, RunOver, serve
 from teacher.web_expert import WEB_EXPERT, WebExpert
 
 PARAMS = (
@@ -89,15 +93,17 @@ PARAMS = (
     Param("linger", 0.0, "seconds the page stays after the run while someone looks at it, "
           "unless closed there; 0: it ends with the run", non_negative, read_only=False),
 )
-PACE_COMMANDS = {"pause": Pace.Request.PAUSE, "resume": Pace.Request.RESUME,
-                 "step": Pace.Request.STEP}
+PACE_COMMANDS = {"query": Pace.Request.QUERY, "pause": Pace.Request.PAUSE,
+                 "resume": Pace.Request.RESUME, "step": Pace.Request.STEP}
 COMMAND_WAIT = 10.0  # seconds the page waits for a command that needs no simulator
 SERVICE_WAIT = 5.0  # seconds a command waits for its service to be discovered
+ANSWER_POLL = 0.2  # seconds between an HTTP thread's looks at whether the run is gone
 
 
 class WebTeacherNode(Node, Api):
-    def __init__(self) -> None:
-        super().__init__("web_teacher")
+    def __init__(self, **node_options: Any) -> None:
+        """``node_options``: rclpy Node's (a test's context and parameter overrides)."""
+        super().__init__("web_teacher", **node_options)
         p = declare(self, PARAMS)
         where = p["teaching_set"] or "the packaged teaching set"
         try:
@@ -113,6 +119,7 @@ class WebTeacherNode(Node, Api):
         self._queue: queue.Queue[tuple[Any, ThreadFuture]] = queue.Queue()
         self._pending: list[tuple[Future, float, Any, ThreadFuture]] = []
         self._waiting: list[tuple[Any, ThreadFuture, float]] = []  # for their service
+        self._later: list[tuple[float, PacePlan, Request, ThreadFuture]] = []  # pace calls
         self._demos = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
         follow(self, self.app.picture, self.app.lock)
         # The arbiter starts once these have matched (sgim_ros/ready.py).
@@ -133,6 +140,7 @@ class WebTeacherNode(Node, Api):
         except Refused as error:
             raise ParameterError(str(error)) from None
         self.url = self.server.url
+        self.context.on_shutdown(self._context_over)
         self.create_timer(0.02, self.work)  # queued commands, pending calls, the cast
         self.address_file = Path(p["address_file"]) if p["address_file"] else None
         self.linger_file = (self.address_file.with_suffix(".linger")
@@ -205,14 +213,34 @@ class WebTeacherNode(Node, Api):
         if msg.waiting_for_teacher and not was_waiting:
             self.app.say(f"your turn at movement {msg.movement_index}: demonstrate, or "
                          "resume to go on", "turn")
-        elif msg.paused and msg.held and not was_held:
-            self.app.say(msg.message)
+        elif msg.paused and msg.held and not was_held and not self._planning():
+            # held: the arbiter's count is where the run stands (its "pausing" text is older)
+            self.app.say(msg.message if msg.message.startswith(("step done", "paused")) else
+                         f"paused at movement {msg.movement_index}")
+
+    def _planning(self) -> bool:
+        """Whether a page's pace command is under way (its answer says where the run is)."""
+        return bool(self._later) or any(isinstance(item[2], PacePlan) for item in self._pending)
 
     # --- the server's questions (HTTP threads) --------------------------------------------
 
+    def _context_over(self) -> None:
+        """The ROS context is shut down: what the page asks is answered 503 from now on."""
+        self.server.over = RUN_OVER
+
+    def _running(self) -> None:
+        if not self.context.ok():
+            raise RunOver(RUN_OVER)
+
     def state(self, query: dict[str, int]) -> dict[str, Any]:
+        self._running()
+        try:
+            listeners = self._demos.get_subscription_count()
+        except Exception:  # rclpy's RCLError once the context is shut down under us
+            self._running()
+            raise
         with self.app.lock:
-            self.app.learner.listeners = self._demos.get_subscription_count()
+            self.app.learner.listeners = listeners
         return self.app.state(**query)
 
     def legend(self) -> dict[str, Any]:
@@ -222,6 +250,7 @@ class WebTeacherNode(Node, Api):
         return self._lake if name == "lake.png" else self.casts.picture
 
     def command(self, body: Any) -> dict[str, Any]:
+        self._running()
         return self.app.command(body, self._carry_out)
 
     def _carry_out(self, decision: Any) -> dict[str, Any]:
@@ -229,11 +258,17 @@ class WebTeacherNode(Node, Api):
         done: ThreadFuture = ThreadFuture()
         self._queue.put((decision, done))
         wait = COMMAND_WAIT + SERVICE_WAIT + (
-            self.execute_timeout if isinstance(decision, ExecuteFirst) else 0.0)
-        try:
-            return done.result(timeout=wait)
-        except ThreadTimeout:
-            return {"ok": False, "message": f"no answer within {wait:g} s: is the node busy?"}
+            self.execute_timeout if isinstance(decision, ExecuteFirst) else
+            SETTLE if isinstance(decision, PaceRequest) else 0.0)
+        end = time.monotonic() + wait
+        while True:  # the main thread stops answering once the run is gone: say so at once
+            try:
+                return done.result(timeout=max(0.0, min(ANSWER_POLL, end - time.monotonic())))
+            except ThreadTimeout:
+                self._running()
+                if time.monotonic() >= end:
+                    return {"ok": False, "message": f"no answer within {wait:g} s: is the "
+                            "node busy?"}
 
     # --- the main thread: commands that touch ROS -------------------------------------------
 
@@ -255,6 +290,10 @@ class WebTeacherNode(Node, Api):
             if future.done() or time.monotonic() > deadline:
                 self._pending.remove(item)
                 self._finish(future, decision, done)
+        for item in list(self._later):  # a pace plan's next call, when it is due
+            if time.monotonic() >= item[0]:
+                self._later.remove(item)
+                self._call_pace(*item[1:])
         self._poll_render()
         if self._lingering and self.app.linger_ended():
             self._stop_lingering()
@@ -287,10 +326,8 @@ class WebTeacherNode(Node, Api):
                 if not self._pace.service_is_ready():
                     raise CommandError("the run has no pace service (is it running, with a "
                                        "human teacher?)")
-                future = self._pace.call_async(Pace.Request(
-                    command=PACE_COMMANDS[decision.what], steps=decision.steps))
-                self._pending.append((future, time.monotonic() + COMMAND_WAIT, decision,
-                                      done))
+                plan = PacePlan(decision.what, decision.steps, time.monotonic())
+                self._call_pace(plan, plan.first(), done)
         except CommandError as error:
             self.app.say(f"refused: {error}", "error")
             done.set_result({"ok": False, "message": str(error)})
@@ -301,9 +338,8 @@ class WebTeacherNode(Node, Api):
                 future.cancel()
                 raise CommandError("the service did not answer in time")
             reply = future.result()
-            if isinstance(decision, PaceRequest):
-                self.app.say(reply.message, "info" if reply.accepted else "error")
-                done.set_result({"ok": bool(reply.accepted), "message": reply.message})
+            if isinstance(decision, PacePlan):
+                self._paced(decision, reply, done)
                 return
             landed = reply.status == Movement.STATUS_OK and len(reply.outcome) == 2
             demo = executed_demonstration(decision, landed, np.asarray(reply.outcome),
@@ -316,6 +352,23 @@ class WebTeacherNode(Node, Api):
         except CommandError as error:
             self.app.say(f"refused: {error}", "error")
             done.set_result({"ok": False, "message": str(error)})
+
+    def _call_pace(self, plan: PacePlan, request: Request, done: ThreadFuture) -> None:
+        future = self._pace.call_async(Pace.Request(command=PACE_COMMANDS[request.command],
+                                                    steps=request.steps))
+        self._pending.append((future, time.monotonic() + COMMAND_WAIT, plan, done))
+
+    def _paced(self, plan: PacePlan, reply: Pace.Response, done: ThreadFuture) -> None:
+        """A pace plan's reply: its next call, or the page's answer (web/pacing.py)."""
+        state = reply.state
+        step = plan.next(PaceReply(bool(reply.accepted), reply.message, state.paused,
+                                   state.held, int(state.movement_index),
+                                   int(state.total_movements)), time.monotonic())
+        if isinstance(step, Request):
+            self._later.append((time.monotonic() + step.after, plan, step, done))
+            return
+        self.app.say(step["message"], "info" if step["ok"] else "error")
+        done.set_result(step)
 
     def _send(self, demo: SendDemonstration) -> dict[str, Any]:
         with self.app.lock:

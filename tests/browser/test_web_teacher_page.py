@@ -4,12 +4,14 @@ with an access token.
 
 One short SGIM-D run with `--teacher web --wait-for-teacher forever` serves every test, in
 order: it waits for the teacher before its first movement and every PERIOD movements, so each
-test acts at its own turn, on a machine however loaded. At the turns the page steps the run,
-then demonstrates in every way a person can: a double click on an unreached teaching goal
-(one demonstration), a pick among goals drawn too close to click apart, a reached goal taught
-again on purpose, the confirmation of an action offered for another point, 24 pasted numbers.
-After the run the page stays (`--web-linger`) until the person closes it. The run is then
-checked from its bag.
+test acts at its own turn, on a machine however loaded. The page opened without its token (or
+with a wrong one) says what to open. At the turns the page steps the run (also while it moves:
+the step counts from where it stops), then demonstrates in every way a person can: a double
+click on an unreached teaching goal (one demonstration), a pick among goals drawn too close to
+click apart, a reached goal taught again on purpose, the confirmation of an action offered for
+another point, 24 pasted numbers. After the run, the map's and the error chart's axes are
+checked against what they label, and the page stays (`--web-linger`) until the person closes
+it. The run is then checked from its bag.
 
 The address: the machine's own IPv4 address (`hostname -I`); a machine with none but
 loopback serves on every interface and the browser opens it by a name it resolves to
@@ -123,6 +125,13 @@ def wait_for_turn(page, movement: int, timeout: float = 180.0) -> None:
         arg=movement, timeout=timeout * 1000)
 
 
+def wait_for_pause(page, movement: int) -> None:
+    """Until the page shows the run paused at ``movement``."""
+    page.wait_for_function("m => document.querySelector('#pace-state').textContent === "
+                           "'paused' && Number(document.querySelector('#count').textContent) "
+                           "=== m", arg=movement, timeout=60_000)
+
+
 def goal_pixels(page) -> np.ndarray:
     return np.array([[p["x"], p["y"]] for p in page.evaluate(
         "[...window.teacherPage.view.teaching.outcomes.keys()]"
@@ -164,6 +173,27 @@ def test_the_page_works_with_a_token_on_another_address(web_run):
     for path in ("/api/state", "/api/legend", "/lake.png"):
         assert fetch(page, path)["status"] == 401, path
     assert fetch(page, "/api/state", headers=f"{{'X-Teacher-Token': {TOKEN!r}}}")["status"] == 200
+    # The title names the run's learner (it said SGIM-D whatever the run).
+    page.wait_for_function("document.title === 'SGIM-D web teacher'")
+    assert page.locator("#title").inner_text() == "SGIM-D web teacher"
+
+
+def test_the_page_without_its_token_says_which_address_to_open(web_run):
+    """It said only 'the web teacher does not answer (401)'; the server's words say more."""
+    _, page, _, _ = web_run
+    address = urlsplit(page.url)
+    other = page.context.new_page()
+    try:
+        for query, what in (("", "no access token"), ("token=not-the-token", "a wrong access "
+                                                       "token")):
+            other.goto(urlunsplit(address._replace(query=query)))
+            other.wait_for_selector("#problem:not(.hidden)")
+            assert other.locator("#problem").inner_text().startswith(
+                f"{what}: open this page at the address the run printed after 'teach at', "
+                "with its ?token=")
+            assert other.locator("#run-state").inner_text() == "no access: see the message below"
+    finally:
+        other.close()
 
 
 def test_bad_input_from_the_page_is_refused_with_a_message(web_run):
@@ -220,12 +250,25 @@ def test_step_then_a_double_click_demonstrates_once(web_run):
     # Step 3 movements (this ends the turn without a demonstration), then go on.
     page.fill("#step-count", "3")
     page.click("#step")
-    wait_for_message(page, "stepping 3 movements")
-    page.wait_for_function("document.querySelector('#pace-state').textContent === 'paused' "
-                           "&& document.querySelector('#count').textContent === '3'",
-                           timeout=60_000)
+    assert wait_for_message(page, "stepping 3 movements") == (
+        "stepping 3 movements from movement 0: it pauses again at movement 3")
+    wait_for_pause(page, 3)
     time.sleep(0.5)
     assert page.locator("#count").inner_text() == "3"  # a step pauses again
+    # A step asked while a job runs counts from where the run stops, and pauses there plus
+    # its movements (it was counted from the job's start, and went on to the job's end).
+    page.fill("#step-count", "30")
+    page.click("#step")
+    wait_for_message(page, "stepping 30 movements from movement 3")
+    page.fill("#step-count", "2")
+    page.click("#step")
+    said = wait_for_message(page, "stepping 2 movements from movement")
+    start = int(re.search(r"from movement (\d+): it pauses again at movement (\d+)",
+                          said)[1])
+    assert 3 <= start <= 33 and said.endswith(f"movement {start + 2}")
+    wait_for_pause(page, start + 2)
+    time.sleep(0.5)
+    assert int(page.locator("#count").inner_text()) == start + 2
     page.click("#resume")
     wait_for_message(page, "^resumed")
     # Landings appear as the run goes, coloured by process, until the next turn.
@@ -233,7 +276,7 @@ def test_step_then_a_double_click_demonstrates_once(web_run):
     assert 10 < page.evaluate("window.teacherStats.landings") <= PERIOD
     # Pause at the turn, so that the run stands still after the demonstration.
     page.click("#pause")
-    wait_for_message(page, f"pausing at movement {PERIOD}")
+    wait_for_message(page, f"^paused at movement {PERIOD}$")
     # A double click on an unreached (red) teaching goal: one demonstration.
     goals = lone_goals(page, reached=False)
     assert goals, "no unreached teaching goal to click"
@@ -382,6 +425,59 @@ def test_the_legend_shows_every_mark_drawn_and_only_those_in_distinct_colours(we
     close = [(a, b) for a in coloured for b in coloured
              if a < b and delta_e(coloured[a], coloured[b]) < 20]
     assert not close, close
+
+
+def test_the_map_and_the_error_chart_have_axes_in_metres(web_run):
+    """The map had no axes, scale or units, the error chart a bare 0 and maximum."""
+    from sim_bridge.scaling import OUTCOME_BOX
+
+    _, page, _, _ = web_run
+    page.wait_for_function("document.querySelector('#run-state').textContent"
+                           ".startsWith('finished')", timeout=180_000)
+    lo, hi = float(OUTCOME_BOX[0]), float(OUTCOME_BOX[1])
+    axes = page.evaluate("""() => {
+        const box = document.querySelector('#overlay').getBoundingClientRect();
+        const ticks = (id) => [...document.querySelectorAll(`#${id} text.tick-label`)].map(e => {
+            const r = e.getBoundingClientRect();
+            return {v: Number(e.dataset.value), x: r.x + r.width / 2, y: r.y + r.height / 2}; });
+        const titles = (id) => [...document.querySelectorAll(`#${id} text.title`)]
+            .map(e => e.textContent);
+        return {box: {x: box.x, y: box.y, w: box.width, h: box.height},
+                x: ticks('x-axis'), y: ticks('y-axis'), xt: titles('x-axis'),
+                yt: titles('y-axis'), et: titles('errors')}; }""")
+    box = axes["box"]
+    assert axes["xt"] == ["x (m), forward from the robot"]
+    assert axes["yt"] == ["y (m), to the robot's left"]
+    assert [t["v"] for t in axes["x"]] == [t["v"] for t in axes["y"]] == list(range(-8, 9, 2))
+    for tick in axes["x"]:  # each label under the place of its value on the map
+        u = 2 * (tick["v"] - lo) / (hi - lo) - 1
+        assert abs(tick["x"] - (box["x"] + (u + 1) / 2 * box["w"])) < 2, tick
+    for tick in axes["y"]:
+        u = 2 * (tick["v"] - lo) / (hi - lo) - 1
+        assert abs(tick["y"] - (box["y"] + (1 - u) / 2 * box["h"])) < 3, tick
+    caption = page.locator("#map-caption").inner_text()
+    assert "metres" in caption and "divided by 8.5" in caption
+    assert "came down on land" in page.locator("#failed-hint").inner_text()
+    # The error chart: one title per axis, and its last point where its y axis says.
+    assert axes["et"] == ["movements", "error (m)"]
+    chart = page.evaluate("""() => {
+        const q = (s) => [...document.querySelectorAll(`#errors ${s}`)];
+        return {y: q('text.tick-label.y').map(e => [Number(e.dataset.value),
+                                                     Number(e.getAttribute('y')) - 4]),
+                x: q('text.tick-label.x').map(e => Number(e.dataset.value)),
+                points: q('circle.point').map(e => [Number(e.dataset.movement),
+                    Number(e.dataset.value), Number(e.getAttribute('cy'))]),
+                latest: q('text.latest').map(e => e.textContent)}; }""")
+    errors = page.evaluate("window.teacherPage.view.evaluations")
+    assert [p[0] for p in chart["points"]] == [e[0] for e in errors]
+    metres = (hi - lo) / 2
+    assert np.allclose([p[1] for p in chart["points"]], [e[1] * metres for e in errors])
+    (v0, y0), (v1, y1) = chart["y"][0], chart["y"][-1]
+    assert all(v0 <= p[1] <= v1 for p in chart["points"])  # the axis spans every point
+    movement, value, cy = chart["points"][-1]
+    assert abs(cy - (y0 + (value - v0) * (y1 - y0) / (v1 - v0))) < 0.5
+    assert chart["x"][0] == 0 and chart["x"][-1] <= MOVEMENTS and len(chart["x"]) >= 3
+    assert chart["latest"] == [f"{value:.2f} m at movement {movement}"]
 
 
 def test_land_and_water_stay_visible_under_the_interest_shading(web_run):

@@ -336,6 +336,21 @@ def test_the_legend_offers_no_process_that_never_lands_and_its_colours_are_disti
     assert not close, close
 
 
+def test_the_page_names_the_runs_learner_and_the_metres_its_axes_show(app):
+    """The title said SGIM-D for an SGIM-ACTS run; the map had no scale."""
+    from sim_bridge.scaling import outcome_to_world
+
+    assert app.state()["learner_title"] == ""  # no run said its learner yet
+    for learner, title in (("sgim-acts", "SGIM-ACTS"), ("sgim-d", "SGIM-D"),
+                           ("saggriac", "SAGG-RIAC"), ("someday", "someday")):
+        app.picture.set_status(learner, 0, 100, "running", "started")
+        assert app.state()["learner_title"] == title
+    space = WebTeacher.legend()["space"]
+    assert space["unit"] == "m"
+    low, high = outcome_to_world(np.array([[-1.0, -1.0], [1.0, 1.0]]))
+    assert space["box"] == [low[0], high[0], low[1], high[1]]
+
+
 def test_land_and_water_stay_apart_under_any_interest_shading():
     """Under the page's shading (teacher.js SHADE_ALPHA) of any interest colour, the lake's
     two colours differ as much as two distinct marks (the old pale pair dropped to 13)."""

@@ -10,7 +10,7 @@ import threading
 import urllib.error
 import urllib.request
 
-from teacher.web.server import Api, TeacherServer
+from teacher.web.server import RUN_OVER, Api, RunOver, TeacherServer
 
 TOKEN = "a-token-of-sixteen+"
 
@@ -57,6 +57,59 @@ def test_the_pages_own_files_need_no_token_and_everything_else_does():
         assert _request(f"{base}/static/teacher.js", headers={"Host": "evil.example"})[0] == 403
     finally:
         server.stop()
+
+
+def test_a_refused_token_says_what_is_wrong_and_which_address_to_open():
+    """The page shows this message: it said only '401' (the server's words reached curl)."""
+    server = TeacherServer("127.0.0.1", 0, TOKEN, FakeApi())
+    server.start()
+    try:
+        base = f"http://127.0.0.1:{server.port}/api/state"
+        for url, what in ((base, "no access token"), (f"{base}?token=wrong", "a wrong access "
+                                                       "token")):
+            status, _, body = _request(url)
+            message = json.loads(body)["message"]
+            assert status == 401 and message.startswith(f"{what}: open this page at the "
+                                                        "address the run printed after "
+                                                        "'teach at', with its ?token=")
+    finally:
+        server.stop()
+
+
+class GoneApi(FakeApi):
+    """An owner whose ROS side is gone: every call into it fails as rclpy's would."""
+
+    def state(self, query):
+        raise RunOver(RUN_OVER)
+
+    def command(self, body):
+        raise RunOver(RUN_OVER)
+
+
+def test_once_the_run_is_gone_every_answer_about_it_is_a_one_line_503():
+    """After the page's linger, calls into a shut-down ROS context were HTTP 500s."""
+    for api, over in ((GoneApi(), ""), (FakeApi(), RUN_OVER)):
+        server = TeacherServer("127.0.0.1", 0, TOKEN, api)
+        server.over = over
+        server.start()
+        try:
+            base, auth = f"http://127.0.0.1:{server.port}", {"X-Teacher-Token": TOKEN}
+            connection = http.client.HTTPConnection("127.0.0.1", server.port, timeout=10)
+            connection.request("POST", "/api/command", body=b'{"command": "none"}',
+                               headers={**auth, "X-Teacher": "1",
+                                        "Content-Type": "application/json"})
+            reply = connection.getresponse()
+            answers = [(reply.status, reply.read())]
+            connection.close()
+            paths = ("/api/state", "/lake.png") if over else ("/api/state",)
+            answers += [_request(base + path, auth)[::2] for path in paths]
+            for status, body in answers:
+                assert status == 503 and json.loads(body) == {"ok": False,
+                                                              "message": RUN_OVER}
+                assert b"\n" not in body and RUN_OVER.startswith("the run is over")
+            assert _request(base + "/")[0] == 200  # the page itself still loads, and says it
+        finally:
+            server.stop()
 
 
 def _raw(port: int, data: bytes) -> tuple[int, str, dict]:

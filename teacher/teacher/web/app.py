@@ -51,6 +51,7 @@ from sgim_nodes.view.picture import (
     LivePicture,
 )
 from sgim_ros.clip import clipped, value_text
+from sim_bridge.scaling import OUTCOME_BOX
 from teacher.human_commands import (
     CommandError,
     GoalPoint,
@@ -77,11 +78,27 @@ MARK_COLOURS = {"unreached": (230, 40, 40), "reached": (0, 150, 136), "goal": (0
 # The lake under it all (the node's lake.png): strong enough to stay apart under the shading.
 WATER_RGB = (150, 195, 235)
 LAND_RGB = (232, 214, 168)
+# The learner's name (RunStatus.learner) as people write it, for the page's title.
+LEARNER_TITLES = {"sgim-d": "SGIM-D", "sgim-acts": "SGIM-ACTS", "saggriac": "SAGG-RIAC",
+                  "random-goals": "random goals", "demo-only": "demonstrations only",
+                  "random": "random actions"}
 Answer = dict[str, Any]
 
 
 MESSAGE_LIMIT = 300
 """The longest message the page shows in one line."""
+
+
+def learner_title(name: str) -> str:
+    """How the page names the learner: SGIM-ACTS for sgim-acts; '' while no run said it."""
+    return LEARNER_TITLES.get(name, name)
+
+
+def outcome_space() -> dict[str, Any]:
+    """What the page's axes need: the outcome box in metres of the world (sim_bridge's
+    OUTCOME_BOX: x forward from the robot, y to its left) that [-1, 1]^2 maps onto."""
+    return {"box": [float(v) for v in OUTCOME_BOX], "unit": "m",
+            "x": "forward from the robot", "y": "to the robot's left"}
 
 
 def shown(value: Any, limit: int = 60) -> str:
@@ -178,6 +195,7 @@ class WebTeacher:
             reply: dict[str, Any] = {
                 "time": time.time(),
                 "learner": pic.learner,
+                "learner_title": learner_title(pic.learner),
                 "count": pic.count,
                 "total": pic.total,
                 "failed": pic.failed,
@@ -235,7 +253,8 @@ class WebTeacher:
                               for k in codes},
                 "marks": {name: list(rgb) for name, rgb in MARK_COLOURS.items()},
                 "lake": {"water": list(WATER_RGB), "land": list(LAND_RGB)},
-                "interest": [[f, rgb] for f, rgb in INTEREST_STOPS]}
+                "interest": [[f, rgb] for f, rgb in INTEREST_STOPS],
+                "space": outcome_space()}
 
     # --- what the node hears ---------------------------------------------------------------
 

@@ -18,6 +18,10 @@ Safety, since a page on another site could otherwise talk to it from the teacher
 - commands need the ``X-Teacher: 1`` header and a JSON body, which a cross-site form cannot
   send and a cross-site script cannot send without a CORS preflight this server never grants.
 
+Once the run is over and the node's ROS side is gone (its context shut down, the server not
+stopped yet), every answer about the run is 503 with one line: ``over`` holds it, or the owner
+raises ``RunOver``; never a 500 from a call into a dead context.
+
 Robustness: whatever arrives (any bytes, headers, query or JSON body) gets an answer with a
 JSON body: a valid one, or {"ok": false, "message": ...} with a 4xx status, http.server's own
 refusals included (tests/teacher/test_web_server.py and test_web_fuzz.py try it). The listen
@@ -61,8 +65,15 @@ MESSAGE_LIMIT = 300  # characters of a refusal's message (it may quote what was 
 log = logging.getLogger(__name__)
 
 
+RUN_OVER = "the run is over: the web teacher no longer follows it"
+
+
 class Refused(ValueError):
     """The server cannot start with these settings; the message says why."""
+
+
+class RunOver(RuntimeError):
+    """Raised by the owner (Api) once its run is gone: the request is answered 503."""
 
 
 class Api:
@@ -101,6 +112,7 @@ class TeacherServer(ThreadingHTTPServer):
             raise Refused(f"serving on {host} (not this machine only) needs an access token of "
                           f"at least {MIN_TOKEN} characters (parameter 'token')")
         self.token, self.api = token, api
+        self.over = ""  # set once the run is gone: every answer about it is a 503 saying this
         try:
             super().__init__((host, port), Handler)
         except OSError as error:
@@ -194,10 +206,16 @@ class Handler(BaseHTTPRequestHandler):
             if not given:
                 given = query.get("token", [""])[0]
             if not hmac.compare_digest(given.encode(), token.encode()):
-                self._send_json({"ok": False, "message": "a valid access token is needed "
-                                 "(open the address the node printed, with its ?token=)"},
+                what = "a wrong access token" if given else "no access token"
+                self._send_json({"ok": False, "message": f"{what}: open this page at the "
+                                 "address the run printed after 'teach at', with its "
+                                 "?token=... (the run folder's web_teacher.url holds it)"},
                                 HTTPStatus.UNAUTHORIZED)
                 return False
+        if needs_token and self.server.over:
+            self._send_json({"ok": False, "message": self.server.over},
+                            HTTPStatus.SERVICE_UNAVAILABLE)
+            return False
         return True
 
     # --- answers ----------------------------------------------------------------------------
@@ -226,6 +244,10 @@ class Handler(BaseHTTPRequestHandler):
             handle()
         except (BrokenPipeError, ConnectionResetError, TimeoutError):
             self.close_connection = True
+        except RunOver as error:
+            with contextlib.suppress(OSError):
+                self._send_json({"ok": False, "message": clipped(str(error) or RUN_OVER)},
+                                HTTPStatus.SERVICE_UNAVAILABLE)
         except Exception as error:
             self.close_connection = True
             log.error("the web teacher failed on %s %s: %r", self.command,

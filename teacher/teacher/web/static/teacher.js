@@ -7,6 +7,9 @@
 // One command at a time: every command button is disabled until the answer comes, and each
 // demonstration request carries a new idempotency key, so a double click or a retry cannot
 // demonstrate twice. The legend lists exactly the marks on the picture (teacherPage.drawn).
+// The map's axes and the error chart are SVG, in metres of the world (the legend's "space":
+// the box the outcome space [-1, 1]^2 maps onto). A refused request shows the server's own
+// message (a missing token: which address to open).
 "use strict";
 (() => {
   const POLL_MS = 300;  // about 3 updates a second (each waits for the previous answer)
@@ -23,7 +26,7 @@
   const base = $("base").getContext("2d");
   const land = $("landings").getContext("2d");
   const over = $("overlay").getContext("2d");
-  const errorCanvas = $("errors").getContext("2d");
+  const SVG = "http://www.w3.org/2000/svg";
 
   const cursor = { landings: 0, evaluations: 0, regions: -1, teaching: -1, log: 0 };
   const view = { legend: null, lake: null, shore: null, surface: null, regions: null,
@@ -200,28 +203,113 @@
     drawLegend();
   }
 
+  // --- axes: the map's and the error chart's, in metres ------------------------------------
+
+  // Round tick values from lo to hi, about `count` of them (steps of 1, 2 or 5 x 10^k).
+  function ticks(lo, hi, count) {
+    const span = hi - lo;
+    if (!(span > 0)) return [lo];
+    const raw = span / count, size = 10 ** Math.floor(Math.log10(raw));
+    const step = [1, 2, 5, 10].map((f) => f * size).find((v) => v >= raw * 0.999);
+    const out = [];
+    for (let k = Math.ceil(lo / step - 1e-9); k * step <= hi + 1e-9 * span; k++) {
+      out.push(Number((k * step).toPrecision(12)));
+    }
+    return out;
+  }
+  const label = (v) => String(Number(v.toPrecision(6)));
+
+  function svg(parent, name, attrs = {}, text = undefined) {
+    const e = document.createElementNS(SVG, name);
+    for (const [k, v] of Object.entries(attrs)) e.setAttribute(k, v);
+    if (text !== undefined) e.textContent = text;
+    parent.append(e);
+    return e;
+  }
+
+  // Metres of the world, from an outcome coordinate (u in [-1, 1]) and back.
+  const space = () => view.legend.space;
+  const metres = (u, axis) => { const b = space().box, lo = b[2 * axis], hi = b[2 * axis + 1];
+                                return lo + ((u + 1) / 2) * (hi - lo); };
+  const outcome = (m, axis) => { const b = space().box, lo = b[2 * axis], hi = b[2 * axis + 1];
+                                 return (2 * (m - lo)) / (hi - lo) - 1; };
+  // An outcome distance in metres (the box is square: one scale for x and y).
+  const distanceMetres = (d) => (d * (space().box[1] - space().box[0])) / 2;
+
+  function drawMapAxes() {
+    const s = space(), unit = s.unit, xs = $("x-axis"), ys = $("y-axis");
+    xs.textContent = ""; ys.textContent = "";
+    const yw = Number(ys.getAttribute("width"));
+    for (const v of ticks(s.box[0], s.box[1], 10)) {  // 1 px: the map's border
+      const x = 1 + px(outcome(v, 0));
+      svg(xs, "line", { x1: x, x2: x, y1: 0, y2: 5, class: "tick" });
+      svg(xs, "text", { x, y: 17, "text-anchor": "middle", class: "tick-label",
+                        "data-value": v }, label(v));
+    }
+    svg(xs, "text", { x: 301, y: 34, "text-anchor": "middle", class: "title" },
+        `x (${unit}), ${s.x}`);
+    for (const v of ticks(s.box[2], s.box[3], 10)) {
+      const y = 1 + py(outcome(v, 1));
+      svg(ys, "line", { x1: yw - 5, x2: yw, y1: y, y2: y, class: "tick" });
+      svg(ys, "text", { x: yw - 8, y: y + 4, "text-anchor": "end", class: "tick-label",
+                        "data-value": v }, label(v));
+    }
+    svg(ys, "text", { x: 0, y: 0, "text-anchor": "middle", class: "title",
+                      transform: "translate(12 301) rotate(-90)" }, `y (${unit}), ${s.y}`);
+    const scale = distanceMetres(1);
+    setText("map-caption", `Seen from above, the robot at (0, 0): where the hook lands, in `
+            + `${unit === "m" ? "metres" : unit} of the world. Offers and the teaching goals' `
+            + `list give the learner's outcome coordinates, from -1 to 1: these divided by `
+            + `${label(scale)}.`);
+  }
+
   function drawErrors() {
-    const c = errorCanvas, w = c.canvas.width, h = c.canvas.height, m = 30;
-    c.clearRect(0, 0, w, h);
-    c.strokeStyle = "#888"; c.lineWidth = 1;
-    c.strokeRect(m, 6, w - m - 6, h - m);
+    const chart = $("errors"), w = Number(chart.getAttribute("width"));
+    const h = Number(chart.getAttribute("height"));
+    const left = 46, right = 10, top = 10, bottom = 36;
+    const unit = space().unit;
+    chart.textContent = "";
+    svg(chart, "rect", { x: left, y: top, width: w - left - right, height: h - top - bottom,
+                         fill: "none", stroke: "#888" });
+    svg(chart, "text", { x: (left + w - right) / 2, y: h - 4, "text-anchor": "middle",
+                         class: "title" }, "movements");
+    svg(chart, "text", { x: 0, y: 0, "text-anchor": "middle", class: "title",
+                         transform: `translate(12 ${(top + h - bottom) / 2}) rotate(-90)` },
+        `error (${unit})`);
     const points = view.evaluations;
-    c.fillStyle = "#555"; c.font = "11px sans-serif";
-    if (!points.length) { c.fillText("no evaluation yet", m + 8, h / 2); return; }
-    const xMax = Math.max(view.total || 0, points[points.length - 1][0], 1);
-    const yMax = Math.max(...points.map((p) => p[1])) * 1.1 || 1;
-    const X = (v) => m + (v / xMax) * (w - m - 6);
-    const Y = (v) => 6 + (1 - v / yMax) * (h - m);
-    c.fillText(yMax.toFixed(2), 2, 14); c.fillText("0", 18, h - m + 6);
-    c.fillText(String(xMax), w - 40, h - 8); c.fillText("movements", m + 4, h - 8);
-    c.strokeStyle = "#1f77b4"; c.lineWidth = 2; c.beginPath();
-    points.forEach(([x, y], i) => (i ? c.lineTo(X(x), Y(y)) : c.moveTo(X(x), Y(y))));
-    c.stroke();
-    c.fillStyle = "#1f77b4";
-    points.forEach(([x, y]) => c.fillRect(X(x) - 2, Y(y) - 2, 4, 4));
-    const last = points[points.length - 1];
-    c.fillStyle = "#222";
-    c.fillText(`${last[1].toFixed(3)} at ${last[0]}`, w - 110, 20);
+    if (!points.length) {
+      svg(chart, "text", { x: left + 10, y: top + 20 }, "no evaluation yet");
+      return;
+    }
+    const ms = points.map(([x, y]) => [x, distanceMetres(y)]);
+    const xMax = Math.max(view.total || 0, ms[ms.length - 1][0], 1);
+    // The y axis ends at the first round tick above the largest error: every point inside.
+    const highest = Math.max(...ms.map((p) => p[1])) * 1.05 || 1;
+    const rough = ticks(0, highest, 4), step = rough[1] - rough[0] || highest;
+    const yTicks = Array.from({ length: Math.ceil(highest / step - 1e-9) + 1 },
+                              (_, k) => Number((k * step).toPrecision(12)));
+    const yMax = yTicks[yTicks.length - 1];
+    const X = (v) => left + (v / xMax) * (w - left - right);
+    const Y = (v) => top + (1 - v / yMax) * (h - top - bottom);
+    for (const v of ticks(0, xMax, 4)) {
+      svg(chart, "line", { x1: X(v), x2: X(v), y1: h - bottom, y2: h - bottom + 4, class: "tick" });
+      svg(chart, "text", { x: X(v), y: h - bottom + 15, "text-anchor": "middle",
+                           class: "tick-label x", "data-value": v }, label(v));
+    }
+    for (const v of yTicks) {
+      if (v > 0) svg(chart, "line", { x1: left, x2: w - right, y1: Y(v), y2: Y(v), class: "grid" });
+      svg(chart, "text", { x: left - 4, y: Y(v) + 4, "text-anchor": "end",
+                           class: "tick-label y", "data-value": v }, label(v));
+    }
+    svg(chart, "polyline", { class: "curve",
+                             points: ms.map(([x, y]) => `${X(x)},${Y(y)}`).join(" ") });
+    for (const [x, y] of ms) {
+      svg(chart, "circle", { cx: X(x), cy: Y(y), r: 2.5, class: "point", "data-movement": x,
+                             "data-value": y });
+    }
+    const [lx, ly] = ms[ms.length - 1];
+    svg(chart, "text", { x: w - right - 4, y: top + 14, "text-anchor": "end", class: "latest" },
+        `${ly.toFixed(2)} ${unit} at movement ${lx}`);
   }
 
   // --- the legend: one entry per kind of mark on the picture, no more ----------------------
@@ -296,10 +384,40 @@
 
   // --- the state ---------------------------------------------------------------------------
 
+  function showProblem(text) {
+    setText("problem", text);
+    $("problem").classList.toggle("hidden", !text);
+  }
+
+  // The server's own words on a refused request (they say what is wrong and what to do).
+  async function failure(reply) {
+    let why = `HTTP ${reply.status}`;
+    try {
+      const answer = await reply.json();
+      if (answer && answer.message) why = answer.message;
+    } catch (error) { /* not JSON: its status says it */ }
+    return Object.assign(new Error(why), { status: reply.status });
+  }
+
+  // A refusal only another address mends (no or a wrong token, an unknown host): said once,
+  // and the page stops asking.
+  function noAccess(error) {
+    if (error.status !== 401 && error.status !== 403) return false;
+    showProblem(error.message);
+    setText("run-state", "no access: see the message below");
+    setClass("run-state", "badge over");
+    return true;
+  }
+
   function apply(s) {
     view.count = s.count; view.total = s.total; view.goal = s.goal;
     view.demonstrations = s.demonstrations || [];
     setText("learner", s.learner || "-");
+    if (s.learner_title) {
+      const title = `${s.learner_title} web teacher`;
+      setText("title", title);
+      if (document.title !== title) document.title = title;
+    }
     setText("count", s.count);
     setText("total", s.total || "?");
     const width = s.total ? `${Math.min(100, Math.floor((100 * s.count) / s.total))}%` : "0";
@@ -398,8 +516,9 @@
     const query = new URLSearchParams(cursor).toString();
     try {
       const reply = await fetch(`/api/state?${query}`, { headers: auth, cache: "no-store" });
-      if (!reply.ok) throw new Error(`${reply.status}`);
+      if (!reply.ok) throw await failure(reply);
       const s = await reply.json();
+      showProblem("");
       const t0 = performance.now();
       apply(s);
       const ms = performance.now() - t0;
@@ -409,12 +528,15 @@
       setTimeout(poll, POLL_MS);
     } catch (error) {
       stats.failures += 1;  // the badge says it; the message line keeps the last command's answer
+      if (noAccess(error)) return;
+      if (error.status) showProblem(error.message);
       if (view.over) {
         view.gone = true;
         setText("run-state", `${view.runState}: the web teacher has stopped`);
         showOver(); refreshButtons();
       } else {
-        setText("run-state", `the web teacher does not answer (${error.message})`);
+        setText("run-state", error.status ? `the web teacher refuses (${error.status})`
+                             : `the web teacher does not answer (${error.message})`);
       }
       setClass("run-state", "badge over");
       setTimeout(poll, view.over ? 5000 : 1000);
@@ -554,12 +676,23 @@
 
   async function start() {
     try {
-      view.legend = await (await fetch("/api/legend", { headers: auth })).json();
+      const reply = await fetch("/api/legend", { headers: auth });
+      if (!reply.ok) throw await failure(reply);
+      view.legend = await reply.json();
     } catch (error) {
-      say(`the web teacher does not answer: ${error.message}`, false);
+      if (noAccess(error)) return;
+      if (error.status) {
+        showProblem(error.message);
+        setText("run-state", `the web teacher refuses (${error.status})`);
+        setClass("run-state", "badge over");
+      } else {
+        say(`the web teacher does not answer: ${error.message}`, false);
+      }
       setTimeout(start, 1000);
       return;
     }
+    showProblem("");
+    drawMapAxes();
     const lake = new Image();
     lake.onload = () => { view.lake = lake; view.shore = readLake(lake); drawBase(); };
     lake.src = withToken("/lake.png");
