@@ -66,7 +66,13 @@ DEMONSTRATIONS = {TURNS: [0, 5, 10, 15], "sgim-d": [5, 10, 15], "demo-only": [5,
 @pytest.fixture
 def repo(scratch_repo, monkeypatch) -> Path:
     """A repository holding a 20-movement, 3-seed copy of the experiment (P = 5), today's
-    page, and its runs made synthetically with the fingerprints the experiment expects."""
+    page, and its runs made synthetically with the fingerprints the experiment expects. Its
+    reference runs are stood in for (test_reproduce_graph.py makes real ones): the report,
+    not the graph, is what this module tests."""
+    from sgim_nodes.experiments import references
+
+    monkeypatch.setattr(references, "graph_reference",
+                        lambda spec, work, name: references.digest_arrays([[hash(spec) % 997]]))
     tmp_path = scratch_repo.root
     shutil.copy(REPO / "docs" / "active_strategies.md", tmp_path / "docs")
     scratch_repo.experiment("tiny", textwrap.dedent("""\

@@ -41,6 +41,7 @@ def repo(scratch_repo) -> Path:
           chunk: 10
           seed: 3
         """)
+    assert cli.main(["--references"]) == 0  # a world experiment's: its world's key alone
     return scratch_repo.root
 
 
@@ -100,6 +101,36 @@ def test_a_change_of_the_runs_makes_the_page_stale(repo, capsys):
     path.write_text(path.read_text().replace("seed: 3", "seed: 4"))
     assert cli.main(["--check"]) == 1
     assert "stale and not marked" in capsys.readouterr().out
+
+
+def test_a_page_stamped_by_the_sources_of_today_s_code_stays_fresh(repo, capsys):
+    """A page stamped before reference runs existed (by its runs' sources) is fresh while
+    today's code is the code that stamped it, through an alias the references record; the
+    alias names what that code's runs did, so a change of the runs still stales the page."""
+    from sgim_nodes.provenance.fingerprint import environment
+    from sgim_nodes.provenance.record import Provenance
+
+    experiment = pinned.find("pond")
+    page = repo / "docs" / "pond.md"
+    made = Provenance.now("x", "pond", experiment.source_fingerprint(), environment(), 1.0)
+    pages.write_page(page, {"provenance": made.markdown()}, "pond")
+    assert cli.main(["--check"]) == 1
+    assert cli.main(["--references"]) == 0
+    assert "pond: its runs do what they did" in capsys.readouterr().err
+    assert cli.main(["--check"]) == 0
+    path = repo / "experiments" / "pond.yaml"
+    path.write_text(path.read_text().replace("seed: 3", "seed: 4"))
+    assert cli.main(["--check"]) == 1
+
+
+def test_check_says_when_the_references_are_another_code_s(repo, capsys, monkeypatch):
+    from sgim_nodes.experiments import references
+
+    monkeypatch.setattr(references, "maker_key", lambda maker: "0123456789abcdef")
+    assert cli.main(["--check"]) == 1
+    out = capsys.readouterr().out
+    assert "pond: the world experiments' reference runs were made by other code" in out
+    assert "ros_ws/reproduce.sh --references" in out
 
 
 def test_data_other_than_pinned_is_refused_and_pin_takes_todays(repo, capsys):

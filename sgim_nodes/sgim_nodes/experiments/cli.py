@@ -5,9 +5,11 @@ made or resumed (here, several side by side, or on a Ray cluster with --address)
 report writes the page's generated blocks and figures, with a provenance block saying what
 made them. Hand-written prose around the blocks stays as it is.
 
-`--check` (run by the test suite) says which pages are stale: made by another learner than
-today's checkout gives the experiment, without the banner that says so; `--mark-stale` writes
-that banner.
+`--check` (run by the test suite) says which pages are stale: their runs would not do today
+what they did, and the page lacks the banner that says so; `--mark-stale` writes that banner.
+What runs do is known by reference runs (experiments/references.py), kept in
+experiments/references.yaml; `--references` makes them again after a change of the code and
+says which experiments' runs changed.
 
 Exit codes: 0 done, 1 a run or the report failed, or --check found a stale page without its
 banner, 2 refused (unknown experiment, a bad experiment file, data files other than pinned).
@@ -30,7 +32,15 @@ from sgim_nodes.experiments.pinned import (
     Experiment,
     ExperimentError,
     all_experiments,
+    experiment_files,
     find,
+)
+from sgim_nodes.experiments.references import (
+    ReferencesOutdated,
+    aliases_of,
+    make_references,
+    read_table,
+    write_table,
 )
 from sgim_nodes.provenance.fingerprint import environment
 from sgim_nodes.provenance.record import Provenance
@@ -40,7 +50,7 @@ FIGURES = REPO / "docs" / "figures"
 
 
 def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
-    known = ", ".join(p.stem for p in sorted(EXPERIMENTS.glob("*.yaml")))
+    known = ", ".join(p.stem for p in experiment_files(EXPERIMENTS))
     p = BriefParser(
         prog="ros_ws/reproduce.sh", description=__doc__.split("\n\n")[0],
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -64,6 +74,9 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                    help="fail on a stale page without its banner, or on unpinned data")
     p.add_argument("--mark-stale", action="store_true",
                    help="write the banner into every stale page")
+    p.add_argument("--references", action="store_true",
+                   help="make the reference runs of the named experiments (or all) that "
+                        "today's code lacks, and say whose runs changed")
     p.add_argument("--pin", action="store_true",
                    help="write today's data file hashes into the named experiment files")
     args = p.parse_args(argv)
@@ -73,8 +86,9 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         p.error("--runs-dir needs exactly one experiment")
     if args.report_only and args.runs_only:
         p.error("--report-only and --runs-only exclude each other")
-    if not (args.names or args.all or args.list or args.check or args.mark_stale):
-        p.error("name an experiment (or --all, --list, --check, --mark-stale)")
+    if not (args.names or args.all or args.list or args.check or args.mark_stale
+            or args.references):
+        p.error("name an experiment (or --all, --list, --check, --mark-stale, --references)")
     return args
 
 
@@ -92,10 +106,16 @@ def check(experiments: list[Experiment], mark: bool) -> int:
             print(f"{exp.path.name}: {problem} (ros_ws/reproduce.sh {exp.name} --pin pins "
                   "today's files; the pages then need making again)")
             problems += 1
-        expected = exp.fingerprint()
+        table = read_table(exp.references_path)
+        try:
+            expected = exp.fingerprint(table)
+        except ReferencesOutdated as error:
+            print(f"{exp.name}: {error}")
+            problems += 1
+            continue
         for page in exp.pages:
             path = REPO / page
-            state = pages.freshness(path, exp.name, expected)
+            state = pages.freshness(path, exp.name, expected, aliases_of(table, exp.name))
             text = path.read_text(encoding="utf-8")
             if state.fresh:
                 if pages.has_banner(text, exp.name):
@@ -124,13 +144,53 @@ def check(experiments: list[Experiment], mark: bool) -> int:
 
 def listing(experiments: list[Experiment]) -> int:
     for exp in experiments:
-        expected = exp.fingerprint()
-        states = [f"{page} " + ("fresh" if pages.freshness(REPO / page, exp.name,
-                                                           expected).fresh else "stale")
+        table = read_table(exp.references_path)
+        try:
+            expected = exp.fingerprint(table)
+        except ReferencesOutdated:
+            expected = "unknown (--references)"
+        states = [f"{page} " + ("fresh" if pages.freshness(
+            REPO / page, exp.name, expected, aliases_of(table, exp.name)).fresh else "stale")
                   for page in exp.pages]
         runs = exp.run_fingerprints()
         print(f"{exp.name}\t{exp.maker}\t{len(runs)} runs\tfingerprint {expected}\t"
               + "; ".join(states))
+    return 0
+
+
+def references(experiments: list[Experiment], parallel: int) -> int:
+    """Make the reference runs today's code lacks; say, experiment by experiment, whether its
+    runs do what they did. A page stamped by the sources of code whose runs these are (the
+    stamp pages had before reference runs) is kept fresh by an alias."""
+    by_folder: dict[Path, list[Experiment]] = {}
+    for exp in experiments:
+        by_folder.setdefault(exp.references_path, []).append(exp)
+    for path, group in by_folder.items():
+        table = read_table(path)
+        before = {}
+        for exp in group:
+            try:  # what the table's code did
+                before[exp.name] = exp.fingerprint(table, todays=False)
+            except ReferencesOutdated:
+                before[exp.name] = None
+        made = make_references(group, table, parallel, say)
+        aliases = {name: dict(found) for name, found in (made.get("aliases") or {}).items()}
+        for exp in group:
+            today = exp.fingerprint(made)
+            was = before[exp.name]
+            said = ("its runs do what they did" if was == today else
+                    "its runs changed: its pages are stale" if was else "its runs are known")
+            say(f"{exp.name}: {said} (fingerprint {today})")
+            sources = exp.source_fingerprint()
+            for page in exp.pages:
+                stamp = pages.provenance_of((REPO / page).read_text(encoding="utf-8"),
+                                            exp.name)
+                if stamp is not None and stamp.fingerprint == sources:
+                    aliases.setdefault(exp.name, {})[stamp.fingerprint] = today
+        if aliases:
+            made["aliases"] = aliases
+        write_table(path, made)
+        say(f"wrote {_shown(path)}")
     return 0
 
 
@@ -182,7 +242,8 @@ def reproduce(exp: Experiment, args: argparse.Namespace, command: str) -> int:
     wall = time.monotonic() - began
     notes = [*report.notes, f"runs in `{_shown(runs_dir)}`"]
     outputs = [*exp.pages, _shown(FIGURES)]  # what this command writes is not a change
-    made = Provenance.now(command, exp.name, exp.fingerprint(), environment(), wall, notes,
+    made = Provenance.now(command, exp.name, current_fingerprint(exp, args.parallel),
+                          environment(), wall, notes,
                           outputs=outputs)
     for page in exp.pages:
         blocks = dict(report.blocks.get(page, {}))
@@ -192,6 +253,16 @@ def reproduce(exp: Experiment, args: argparse.Namespace, command: str) -> int:
     for figure in report.figures:
         say(f"{exp.name}: drew {_shown(figure)}")
     return 0
+
+
+def current_fingerprint(exp: Experiment, parallel: int) -> str:
+    """The experiment's fingerprint, its reference runs made first if today's code lacks
+    them (a page is stamped with what its runs do)."""
+    try:
+        return exp.fingerprint()
+    except ReferencesOutdated:
+        references([exp], parallel)
+        return exp.fingerprint()
 
 
 def _shown(path: Path) -> str:
@@ -209,6 +280,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         experiments = selected(args)
         if args.list:
             return listing(experiments)
+        if args.references:
+            return references(experiments, args.parallel)
         if args.check or args.mark_stale:
             return check(experiments, args.mark_stale)
         if args.pin:

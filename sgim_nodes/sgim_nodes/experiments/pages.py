@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from sgim_nodes.provenance.record import Provenance
@@ -120,10 +120,15 @@ class Freshness:
     experiment: str
     made: Provenance | None
     expected: str
+    aliases: Mapping[str, str] = field(default_factory=dict)
+    """Page fingerprints of code whose runs did what today's do (references.aliases_of)."""
 
     @property
     def fresh(self) -> bool:
-        return self.made is not None and self.made.fingerprint == self.expected
+        if self.made is None:
+            return False
+        made = self.made.fingerprint
+        return made == self.expected or self.aliases.get(made) == self.expected
 
     def why(self) -> str:
         if self.made is None:
@@ -131,6 +136,7 @@ class Freshness:
         return f"was made with fingerprint {self.made.fingerprint} at commit {self.made.commit}"
 
 
-def freshness(page: Path, experiment: str, expected: str) -> Freshness:
+def freshness(page: Path, experiment: str, expected: str,
+              aliases: Mapping[str, str] | None = None) -> Freshness:
     return Freshness(page, experiment, provenance_of(page.read_text(encoding="utf-8"),
-                                                     experiment), expected)
+                                                     experiment), expected, dict(aliases or {}))

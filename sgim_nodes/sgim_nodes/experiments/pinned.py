@@ -11,8 +11,9 @@ pages it writes, and how its runs are made:
   (the analytic arms) and for measurements inside the learner (experiments/runner_jobs.py);
 - ``world``: casts of random actions, no learner (experiments/world_jobs.py).
 
-Its fingerprint is a hash of its runs' learner fingerprints (provenance/fingerprint.py) and
-seeds: a page made from it is fresh while today's checkout gives the same one.
+Its fingerprint says what its runs do: the digests of reference runs of its configurations,
+its runs' names (which carry the seeds) and its data files (experiments/references.py). A page
+made from it is fresh while today's checkout gives the same one.
 """
 
 from __future__ import annotations
@@ -132,8 +133,25 @@ class Experiment:
         jobs = self.runner_jobs if self.maker == "runner" else self.world_jobs
         return {job.name: job.fingerprint().value for job in jobs}
 
-    def fingerprint(self) -> str:
-        """The experiment's: its runs' fingerprints and names (which carry the seeds)."""
+    @property
+    def references_path(self) -> Path:
+        """The kept reference digests of the experiments of this folder (references.py)."""
+        from sgim_nodes.experiments.references import table_path
+
+        return table_path(self.path.parent)
+
+    def fingerprint(self, table: Mapping[str, Any] | None = None, todays: bool = True) -> str:
+        """What its runs do (references.py): the digests of its configurations' reference
+        runs, its runs' names and its data files. ReferencesOutdated when the kept digests
+        (``table``, else the folder's references.yaml) are not today's code's."""
+        from sgim_nodes.experiments.references import experiment_fingerprint, read_table
+
+        return experiment_fingerprint(self, read_table(self.references_path)
+                                      if table is None else table, todays)
+
+    def source_fingerprint(self) -> str:
+        """The fingerprint of its runs' sources, as pages were stamped before reference runs:
+        its runs' learner fingerprints and names (which carry the seeds)."""
         runs = self.run_fingerprints()
         return fp._digest([fp.canonical(sorted(runs.items())).encode(),
                            fp.canonical(dict(self.data)).encode()])
@@ -194,14 +212,21 @@ def load(path: str | Path) -> Experiment:
 
 
 def all_experiments(folder: Path | None = None) -> list[Experiment]:
-    return [load(p) for p in sorted((folder or EXPERIMENTS).glob("*.yaml"))]
+    return [load(p) for p in experiment_files(folder or EXPERIMENTS)]
+
+
+def experiment_files(folder: Path) -> list[Path]:
+    """The experiment files of a folder: every YAML file but the kept reference digests."""
+    from sgim_nodes.experiments.references import TABLE_NAME
+
+    return [p for p in sorted(folder.glob("*.yaml")) if p.name != TABLE_NAME]
 
 
 def find(name: str, folder: Path | None = None) -> Experiment:
     folder = folder or EXPERIMENTS
     path = folder / f"{name}.yaml"
-    if not path.is_file():
-        known = ", ".join(p.stem for p in sorted(folder.glob("*.yaml")))
+    if not path.is_file() or path not in experiment_files(folder):
+        known = ", ".join(p.stem for p in experiment_files(folder))
         raise ExperimentError(f"no experiment {name!r} (experiments/: {known})")
     return load(path)
 
