@@ -39,7 +39,7 @@ from .environment import ResultLike, is_success
 from .experts import ExpertAnswer
 from .goal_reaching import GoalAttempt, probe_scale_for
 from .imitation import Imitation
-from .learners import DEMONSTRATION, Learner, region_tree_for
+from .learner_base import DEMONSTRATION, Learner, region_tree_for
 from .random_streams import component_rng
 from .scale import WorldScale
 from .strategies import AUTONOMOUS, EMULATION, MIMICRY, Strategy, all_strategies
