@@ -60,6 +60,9 @@ setup(
     # (render_cast, map_reachable) would land on the user's PATH; they run as
     # `python -m sim_bridge.tools.NAME` from any install.
     entry_points={
+        # The runner's --env fishing, found by the learner core (sgim_nodes/core/worlds.py)
+        # on either route.
+        "sgim_nodes.worlds": ["fishing = sim_bridge.core_world:fishing_world"],
         "console_scripts": [
             "sim_bridge = sim_bridge.sim_bridge_node:main",
             "map_reachable = sim_bridge.tools.map_reachable:main",

@@ -161,7 +161,8 @@ def test_only_namespaced_commands_on_path(plain_venv: Path) -> None:
     for package in PACKAGES:  # colcon's layout, unused
         assert not (bin_dir.parent / "lib" / package).exists()
     probe = run_in(plain_venv, "-c", "import importlib.metadata as m; print(*(e.name for d in "
-                                     f"{PACKAGES!r} for e in m.distribution(d).entry_points))")
+                                     f"{PACKAGES!r} for e in m.distribution(d).entry_points "
+                                     "if e.group == 'console_scripts'))")
     commands = probe.stdout.split()
     assert "sgim-learn" in commands, probe.stderr
     for command in commands:

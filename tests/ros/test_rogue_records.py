@@ -190,7 +190,7 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
     from sgim_nodes.core.config import LearnerConfig
     from sgim_nodes.core.evaluator import EVALUATION_SEED_OFFSET, Evaluator
     from sgim_nodes.core.learners import inverse_model_for, inverse_or_centre
-    from sgim_nodes.core.runner import fishing_scale
+    from sim_bridge.core_world import fishing_scale
     from sim_bridge.data_files import load_benchmark_goals
     from sim_bridge.fishing_world import FishingWorld
 

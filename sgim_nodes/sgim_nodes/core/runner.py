@@ -19,15 +19,14 @@ import json
 import sys
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from .config import LearnerConfig
-from .environment import Environment, is_success
-from .evaluator import EVALUATION_SEED_OFFSET, Evaluator
+from .environment import is_success
+from .evaluator import Evaluator
 from .help_request import (
     DEFAULT_TIMING,
     ON_REQUEST,
@@ -37,10 +36,8 @@ from .help_request import (
     check_timing,
 )
 from .learners import CORE_LEARNER_NAMES, Learner, make_learner
-from .planar_arm import ARMS, PlanarArm, benchmark_goals, teaching_set
-from .random_streams import SEED_MAX, component_rng, world_seed
+from .random_streams import SEED_MAX, component_rng
 from .repeatable_casts import RepeatableCasts
-from .scale import WorldScale, unit_box
 from .teaching import (
     ABILITY,
     DEFAULT_DEMONSTRATION_CONTENT,
@@ -58,85 +55,9 @@ from .teaching import (
     check_rule,
     learner_progress,
 )
+from .worlds import World, WorldMissing, build_world, world_names
 
-ENV_NAMES = ("fishing", "planar-arm", *ARMS)
 EVALUATION = "evaluation"
-
-
-@dataclass
-class World:
-    env: Environment
-    eval_env: Environment
-    goals: np.ndarray
-    teaching_actions: np.ndarray | None
-    teaching_outcomes: np.ndarray | None
-    scale: WorldScale
-    # The teacher's own copy of the world (teaching.py, rule "ability"), built on demand:
-    # only a social learner's teacher casts in it.
-    make_teacher_env: Callable[[], Environment] | None = None
-    # The named part of the world an outcome lies in (the fishing lake's basin, arms and
-    # pond), for teachers who know some parts only (experts.py); None: the world names none.
-    part_of: Callable[[np.ndarray], str] | None = None
-
-
-def fishing_scale() -> WorldScale:
-    """The fishing world's outcome box and its measured noise (sim_bridge.scaling)."""
-    from sim_bridge import scaling
-
-    return unit_box(scaling.OUTCOME_DIM, scaling.OUTCOME_NOISE)
-
-
-def build_world(name: str, seed: int, noise: float | None = None, arm_joints: int = 12,
-                arm_cells: int = 12, pond_radius: float | None = None) -> World:
-    """Training world, a separate evaluation world, benchmark goals and the teaching set.
-
-    The fishing world and its data files are imported lazily: the analytic arms need none of
-    them.  The evaluation world gets its own seed so its noise stream is independent.
-    ``planar-arm`` is the small test arm (``arm_joints``, noise-free by default); ``arm-7``
-    and ``arm-20`` are the benchmark arms of planar_arm.ARMS.
-    ``pond_radius`` (fishing only, metres): a world whose isolated pond is smaller
-    (``sim_bridge.lake.Lake``); None keeps the world's default.  Its benchmark and teaching sets
-    are read from the data directory as usual (point SIM_BRIDGE_DATA_DIR at sets built for it).
-    """
-    if pond_radius is not None and name != "fishing":
-        raise ValueError("pond_radius applies to the fishing world only")
-    teacher_seed = world_seed(seed, "teacher-world")
-    if name == "planar-arm" or name in ARMS:
-        if name == "planar-arm":
-            kw = {} if noise is None else {"noise": noise}
-
-            def make(at_seed: int) -> Environment:
-                return PlanarArm(n_joints=arm_joints, seed=at_seed, **kw)
-
-            cells: int | tuple[int, int] = arm_cells
-        else:
-            spec = ARMS[name]
-
-            def make(at_seed: int) -> Environment:
-                return spec.make(at_seed, noise)
-
-            cells = spec.cells
-        env, eval_env = make(seed), make(seed + EVALUATION_SEED_OFFSET)
-        ts = teaching_set(env, cells=cells)
-        return World(env, eval_env, benchmark_goals(env, cells=cells), ts.actions,
-                     ts.outcomes, env.scale, lambda: make(teacher_seed))
-    if name == "fishing":
-        from sim_bridge.data_files import load_benchmark_goals, load_teaching_set
-        from sim_bridge.fishing_world import FishingWorld
-        from sim_bridge.lake import lake_with_pond_radius
-
-        kw: dict[str, Any] = {} if noise is None else {"noise": noise}
-        lake = lake_with_pond_radius(pond_radius)
-        if pond_radius is not None:
-            kw["lake"] = lake
-        ts = load_teaching_set()
-        eval_world = FishingWorld(seed=seed + EVALUATION_SEED_OFFSET, **kw)
-        return World(FishingWorld(seed=seed, **kw), eval_world,
-                     np.asarray(load_benchmark_goals(), dtype=float),
-                     np.asarray(ts.actions, dtype=float), np.asarray(ts.outcomes, dtype=float),
-                     fishing_scale(), lambda: FishingWorld(seed=teacher_seed, **kw),
-                     lake.part_of_outcome)
-    raise ValueError(f"unknown env {name!r}; choose one of {ENV_NAMES}")
 
 
 def _vec(x: np.ndarray | None) -> list[float] | None:
@@ -285,7 +206,7 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                    help="number of movements, the paper's budget is 5000 (default: %(default)s)")
     p.add_argument("--seed", type=int, default=0,
                    help="seed of every random draw of the run (default: %(default)s)")
-    p.add_argument("--env", choices=ENV_NAMES, default="planar-arm",
+    p.add_argument("--env", choices=world_names(), default="planar-arm",
                    help="world: 'fishing' needs sim_bridge; 'planar-arm' (the small test "
                         "arm), 'arm-7' and 'arm-20' (the benchmark arms) are analytic "
                         "(default: %(default)s)")
@@ -360,10 +281,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parse_args(argv)
     from tqdm import tqdm
 
+    options: dict[str, Any] = {"arm_joints": args.arm_joints} if args.env == "planar-arm" else {}
+    if args.pond_radius is not None:
+        options["pond_radius"] = args.pond_radius
     try:
-        world = build_world(args.env, args.seed, args.noise, args.arm_joints,
-                            pond_radius=args.pond_radius)
-    except ImportError as e:  # the fishing world lives in sim_bridge (another package)
+        world = build_world(args.env, args.seed, args.noise, **options)
+    except WorldMissing as e:  # a world of another package, not installed (core/worlds.py)
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    except ImportError as e:  # one the world imports
         print(f"error: --env {args.env} needs {e.name}: {e}", file=sys.stderr)
         return 2
     config = LearnerConfig()

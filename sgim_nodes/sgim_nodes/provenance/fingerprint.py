@@ -44,8 +44,10 @@ LEARNER_MODULES = {"sgim-acts": ("acts_learner", "acts_runner", "experts", "stra
 run of any other learner does not, unless its teachers take turns): they count in the
 ``learner_code`` of those runs only (module_groups)."""
 LIBRARIES = ("numpy", "scipy", "pybullet")
-WORLD_MODULES = ("bezier", "data_files", "fishing_world", "lake", "rod_urdf", "scaling")
-"""The sim_bridge modules a cast runs through (not its node, renderer or tools)."""
+WORLD_MODULES = ("bezier", "core_world", "data_files", "fishing_world", "lake", "rod_urdf",
+                 "scaling")
+"""The sim_bridge modules a cast runs through and the one that builds the runner's world with
+its seeds (not its node, renderer or tools)."""
 
 PER_RUN = frozenset({"seed", "output", "resume_from", "resume_segments", "storage",
                      "wait_for_recorder", "movement_listeners", "ros_domain_id", "host",
