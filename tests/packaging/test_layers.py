@@ -1,6 +1,8 @@
 """The subpackages of sgim_nodes are layers: a module imports only from its own subpackage and
 from lower layers, and no chain of imports comes back to where it started. Lazy imports (inside
-a function) count: they still make the two modules depend on each other."""
+a function) and relative ones (``from .x import y``) count: they still make the two modules
+depend on each other. The core (the lowest layer) imports no world, teacher or ROS package:
+worlds reach it through its registry (core/worlds.py)."""
 
 from __future__ import annotations
 
@@ -26,19 +28,37 @@ def module_name(path: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def imports() -> dict[str, set[str]]:
-    """Module -> the sgim_nodes modules it imports, anywhere in its text."""
-    modules = {module_name(p): p for p in PACKAGE.rglob("*.py")}
+def absolute(module: str, is_package: bool, node: ast.ImportFrom) -> str:
+    """The absolute name ``from ... import`` reads from ``module`` (a package's own
+    ``__init__`` is its package; a level of 1 is the module's package, 2 its parent...)."""
+    if node.level == 0:
+        return node.module or ""
+    package = module.split(".") if is_package else module.split(".")[:-1]
+    base = package[:len(package) - (node.level - 1)]
+    return ".".join([*base, *([node.module] if node.module else [])])
+
+
+def all_imports() -> dict[str, set[str]]:
+    """Module -> every absolute name it imports, anywhere in its text (a name imported from a
+    module counts as the submodule it may be)."""
     found: dict[str, set[str]] = {}
-    for name, path in modules.items():
-        targets: set[str] = set()
+    for path in PACKAGE.rglob("*.py"):
+        name, targets = module_name(path), set()
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-            if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-                targets |= {node.module, *(f"{node.module}.{a.name}" for a in node.names)}
+            if isinstance(node, ast.ImportFrom):
+                source = absolute(name, path.stem == "__init__", node)
+                targets |= {source, *(f"{source}.{a.name}" for a in node.names)}
             elif isinstance(node, ast.Import):
                 targets |= {a.name for a in node.names}
-        found[name] = {t for t in targets if t in modules and t != name}
+        found[name] = targets
     return found
+
+
+def imports() -> dict[str, set[str]]:
+    """Module -> the sgim_nodes modules it imports, anywhere in its text."""
+    found = all_imports()
+    return {name: {t for t in targets if t in found and t != name}
+            for name, targets in found.items()}
 
 
 def layer(module: str) -> str | None:
@@ -78,3 +98,22 @@ def test_no_import_cycle():
         if module not in state:
             visit(module, [module])
     assert not cycles, "\n".join(cycles)
+
+
+FOREIGN = ("sim_bridge", "teacher", "rclpy", "sgim_msgs", "sgim_ros")
+"""Packages the core never imports: the world (it registers itself, core/worlds.py), the
+teacher's nodes and ROS."""
+
+
+def test_the_core_imports_no_world_teacher_or_ros():
+    wrong = sorted(f"{module} imports {target}" for module, targets in all_imports().items()
+                   if layer(module) == "core" for target in targets
+                   if target.split(".")[0] in FOREIGN)
+    assert not wrong, "\n".join(wrong)
+
+
+def test_relative_and_lazy_imports_are_read():
+    core = imports()
+    assert "sgim_nodes.core.learners" in core["sgim_nodes.core.runner"]  # from .learners
+    assert "sgim_nodes.core.acts_runner" in core["sgim_nodes.core.runner"]  # in main()
+    assert "sgim_nodes.core.portable" in core["sgim_nodes.core.acts_learner"]  # from . import
