@@ -18,6 +18,7 @@ class GraphClient:
         self.node = Node(name, context=context)
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
+        self._closed = False
 
     def spin_until(self, condition: Callable[[], bool], timeout: float = DEFAULT_TIMEOUT) -> bool:
         deadline = time.monotonic() + timeout
@@ -72,5 +73,12 @@ class GraphClient:
                    for info in self.node.get_subscriptions_info_by_topic(topic))
 
     def close(self) -> None:
+        """Shut the executor down before destroying the node: its suspended wait generator
+        holds a wait set and a timeout timer that point at the node's rcl entities, and
+        shutdown is what drops it. Destroying the context's only node also tears its DDS
+        participant down. Idempotent, so a test may close early and a fixture again."""
+        if self._closed:
+            return
+        self._closed = True
         self.executor.shutdown()
         self.node.destroy_node()
