@@ -17,6 +17,7 @@ ONE_LINE = re.compile(r"^(\S[^:]*): error: .+ \(see \1 --help\)$")
 # (module, its parsing function, a refused argument list)
 COMMANDS = [
     ("sgim_nodes.graph.experiment_options", "parse_args", ["sgim-d", "--movements", "x"]),
+    ("sgim_nodes.core.runner", "parse_args", ["--movements", "-1"]),
     ("sgim_nodes.graph.batch", "parse_args", ["--bogus"]),
     ("sgim_nodes.sweep.driver", "parse_args", ["--bogus"]),
     ("sgim_nodes.experiments.cli", "parse_args", ["--bogus"]),

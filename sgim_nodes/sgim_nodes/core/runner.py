@@ -20,7 +20,7 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -192,9 +192,19 @@ def _run(learner: Learner, world: World, movements: int, eval_every: int,
     return means
 
 
+class BriefParser(argparse.ArgumentParser):
+    """argparse whose refusal is one line, `PROG: error: MESSAGE (see PROG --help)`, exit code
+    2, not the whole usage before it (as sgim_ros's parser of the ROS commands: the core
+    imports no ROS package)."""
+
+    def error(self, message: str) -> NoReturn:
+        text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in message)
+        self.exit(2, f"{self.prog}: error: {text} (see {self.prog} --help)\n")
+
+
 def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(
-        prog="python -m sgim_nodes.core.runner",
+    p = BriefParser(
+        prog="sgim-learn",
         description="Run one learner on one world without ROS and log every movement and "
                     "evaluation as JSON lines (flushed as it goes).")
     p.add_argument("--learner", choices=CORE_LEARNER_NAMES, default="sgim-d",

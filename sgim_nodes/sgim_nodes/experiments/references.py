@@ -46,6 +46,8 @@ period (REFERENCE_AFTER_TURN), never more than the experiment's own budget."""
 REFERENCE_AFTER_TURN = 100
 REFERENCE_EVALUATIONS = 2  # evaluations in a reference run, the last at its end
 TABLE_NAME = "references.yaml"
+WORLD_JOB_MODULES = ("bezier", "data_files", "fishing_world", "lake", "rod_urdf", "scaling")
+"""The sim_bridge modules a world experiment's casts run through."""
 
 
 class ReferencesOutdated(RuntimeError):
@@ -62,8 +64,9 @@ def maker_sources(maker: str) -> list[Path]:
     bridge = REPO / "sim_bridge" / "sim_bridge"
     world = [bridge / f"{name}.py" for name in fp.WORLD_MODULES]
     experiments = package / "experiments"
-    if maker == "world":
-        return [*world, experiments / "world_jobs.py", experiments / "world_probes.py"]
+    if maker == "world":  # casts of FishingWorld, not the learner's World around it
+        cast = [path for path in world if path.stem in WORLD_JOB_MODULES]
+        return [*cast, experiments / "world_jobs.py", experiments / "world_probes.py"]
     core = sorted((package / "core").glob("*.py"))
     if maker == "runner":
         return [*core, *world, experiments / "runner_jobs.py", experiments / "probes.py"]
