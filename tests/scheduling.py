@@ -29,7 +29,9 @@ from typing import Any
 SPLIT = frozenset({
     "tests/core/test_inverse_model.py",
     "tests/core/test_learners.py",
+    "tests/packaging/test_crashed_worker.py",
     "tests/ros/test_faults.py",
+    "tests/ros/test_first_hour.py",
     "tests/ros/test_graph_runs.py",
     "tests/ros/test_launcher_faults.py",
     "tests/ros/test_pace.py",
@@ -50,7 +52,7 @@ SECONDS: dict[str, float] = {
     "tests/core/test_learners.py::test_goal_babbling_beats_random_on_the_twenty_joint_arm": 34,
     "tests/ros/test_faults.py::test_an_interrupted_run_resumes_from_its_recording_to_the_"
     "same_final_count": 72,
-    "tests/experiments/test_reproduce_graph.py": 70,
+    "tests/experiments/test_reproduce_graph.py": 55,
     "tests/ros/test_pace.py::test_wait_for_teacher_seconds_ends_each_turn_and_zero_never_"
     "waits": 69,
     "tests/core/test_portable.py": 63,
@@ -94,10 +96,17 @@ SECONDS: dict[str, float] = {
     "tests/ros/test_bad_input.py": 24,
     "tests/ros/test_launcher_faults.py::test_a_run_longer_than_its_timeout_fails_and_says_"
     "so": 23,
-    "tests/packaging/test_core_without_ros.py": 19,
+    "tests/packaging/test_core_without_ros.py": 60,
     "tests/ros/test_launcher_faults.py::test_a_simulator_that_never_answers_ends_the_run_"
     "with_a_message": 18,
     "tests/ros/test_parameters_live.py": 17,
+    "tests/ros/test_goal_jobs.py": 36,
+    "tests/experiments/test_references.py": 30,
+    "tests/ros/test_first_hour.py::test_run_sh_honours_runs_dir_and_name": 19,
+    "tests/ros/test_launcher_faults.py::test_a_second_run_asking_for_a_run_s_domain_is_"
+    "refused": 15,
+    "tests/packaging/test_crashed_worker.py::test_a_crashed_worker_fails_its_test_and_the_"
+    "run_ends": 36,
     "tests/analysis/test_pooling.py": 16,
     "tests/ros/test_launcher_faults.py::test_ctrl_c_with_output_piped_stops_every_node": 14,
     "tests/ros/test_node_parameters.py": 13,

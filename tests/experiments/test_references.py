@@ -65,10 +65,9 @@ def reproduce(root: Path, *argv: str) -> subprocess.CompletedProcess:
                           cwd=root, env=env, capture_output=True, text=True, timeout=600)
 
 
-def fingerprints(root: Path) -> dict[str, str]:
-    listed = reproduce(root, "--list")
-    assert listed.returncode == 0, listed.stderr
-    return dict(re.findall(r"^(\w+)\trunner\t.*?fingerprint (\S+)", listed.stdout, re.M))
+def fingerprints(said: str) -> dict[str, str]:
+    """Experiment -> fingerprint, as `--references` says them."""
+    return dict(re.findall(r"\] (\w+): its runs .*\(fingerprint (\w+)\)", said))
 
 
 def edit(path: Path, old: str, new: str) -> None:
@@ -82,7 +81,7 @@ def test_pages_go_stale_when_the_runs_change_and_only_then(tmp_path):
     made = reproduce(root, "--references")
     assert made.returncode == 0, made.stderr
     assert "alpha: its runs are known" in made.stderr, made.stderr
-    first = fingerprints(root)
+    first = fingerprints(made.stderr)
     assert set(first) == {"alpha", "beta"} and first["alpha"] != first["beta"]
     core = root / "sgim_nodes" / "sgim_nodes" / "core"
 
@@ -96,7 +95,7 @@ def test_pages_go_stale_when_the_runs_change_and_only_then(tmp_path):
     assert again.returncode == 0, again.stderr
     for name in ("alpha", "beta"):
         assert f"{name}: its runs do what they did" in again.stderr, again.stderr
-    assert fingerprints(root) == first
+    assert fingerprints(again.stderr) == first
 
     # One line of random goals' behaviour: beta's runs change, alpha's do not.
     edit(core / "learners.py", "UNIFORM_GOALS = (0.0, 1.0, 0.0)",
@@ -105,5 +104,5 @@ def test_pages_go_stale_when_the_runs_change_and_only_then(tmp_path):
     assert changed.returncode == 0, changed.stderr
     assert "alpha: its runs do what they did" in changed.stderr, changed.stderr
     assert "beta: its runs changed: its pages are stale" in changed.stderr, changed.stderr
-    last = fingerprints(root)
+    last = fingerprints(changed.stderr)
     assert last["alpha"] == first["alpha"] and last["beta"] != first["beta"]

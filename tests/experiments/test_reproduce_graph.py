@@ -38,6 +38,20 @@ def experiment(name: str, pages_: list[str], learners: list[str], seeds: list[in
 def test_a_graph_experiment_is_made_reported_and_shares_its_runs(scratch_repo, monkeypatch,
                                                                   capsys):
     tmp_path = scratch_repo.root
+    # A reference run (seed 0, the budget and evaluations of these tiny runs) is the very run
+    # the experiment made for seed 0: its bag is digested rather than made a second time.
+    from sgim_nodes.experiments import references
+
+    digested = []
+
+    def own_run(spec, work, name):
+        made = tmp_path / "runs" / "tiny" / spec.name
+        assert (spec.seed, spec.movements, spec.eval_every) == (0, 40, 20), spec
+        assert f"-seed{spec.seed}" in spec.name, spec.name
+        digested.append(spec.learner)
+        return references.bag_digest(made / "bag")
+
+    monkeypatch.setattr(references, "graph_reference", own_run)
     scratch_repo.page("docs/results.md", page("Results", STUDY_BLOCKS))
     scratch_repo.page("README.md", page("Readme", ("provenance", "summary")))
     scratch_repo.page("docs/other.md", page("Other", STUDY_BLOCKS))
@@ -53,6 +67,7 @@ def test_a_graph_experiment_is_made_reported_and_shares_its_runs(scratch_repo, m
     assert "| sgim-d | 2 |" in blocks["final-errors"]
     assert "SAGG-RIAC is missing" in blocks["findings"]
     assert pages.provenance_of(results, "tiny").fingerprint == pinned.find("tiny").fingerprint()
+    assert sorted(digested) == ["random", "sgim-d"]
     readme = (tmp_path / "README.md").read_text()
     assert "| SGIM-D |" in pages.blocks_of(readme)["summary"]
     for figure in ("study_error_curves.png", "study_landings_frames.png"):

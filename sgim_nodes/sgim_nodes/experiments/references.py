@@ -190,18 +190,23 @@ def digest_arrays(parts: Iterable[Any]) -> str:
 
 
 def graph_reference(spec: Any, work: Path, name: str, timeout: float = 900.0) -> str:
-    """Make one reference run through the graph; the digest of its movements (action,
-    process, status, outcome) and evaluations (movement and where each goal's cast came
-    down). RuntimeError naming its log when the run fails."""
-    from sgim_nodes.bag.reader import load_run
-
+    """Make one reference run through the graph, in ``work/name``, and give its digest
+    (bag_digest). RuntimeError naming the run when it fails."""
     argv = [str(REPO / "ros_ws" / "run_experiment.sh"), *spec.argv(), "--runs-dir", str(work),
             "--name", name, "--quiet", "--no-markers", "--timeout", str(timeout)]
     done = subprocess.run(argv, capture_output=True, text=True, timeout=timeout + 120)
     if done.returncode != 0:
         raise RuntimeError(f"the reference run {' '.join(spec.argv())} failed (exit "
                            f"{done.returncode}): {(done.stderr or done.stdout).strip()[-400:]}")
-    run = load_run(work / name / "bag", ["movements", "evaluations"])
+    return bag_digest(work / name / "bag")
+
+
+def bag_digest(bag: Path) -> str:
+    """The digest of a graph run's movements (action, process, status, outcome) and
+    evaluations (movement, mean distance, where each goal's cast came down)."""
+    from sgim_nodes.bag.reader import load_run
+
+    run = load_run(bag, ["movements", "evaluations"])
     parts: list[Any] = []
     for m in run.movements:
         parts += [m.action, [m.process, m.status], m.outcome if m.status == 0 else []]
