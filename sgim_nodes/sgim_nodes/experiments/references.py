@@ -135,8 +135,13 @@ def write_table(path: Path, table: Mapping[str, Any]) -> None:
     tmp.replace(path)
 
 
-def kept_digests(table: Mapping[str, Any], maker: str) -> dict[str, str]:
-    """The maker's kept digests; ReferencesOutdated unless they are today's code's."""
+def kept_digests(entry: Mapping[str, Any]) -> dict[str, str]:
+    """A maker's entry of the table: configuration id -> the digest of its reference run."""
+    return {str(k): str(v) for k, v in (entry.get("runs") or {}).items()}
+
+
+def check_todays(table: Mapping[str, Any], maker: str) -> None:
+    """ReferencesOutdated unless the maker's kept references are today's code's."""
     entry = table.get(maker) or {}
     today = maker_key(maker)
     if entry.get("key") != today:
@@ -144,7 +149,6 @@ def kept_digests(table: Mapping[str, Any], maker: str) -> dict[str, str]:
             f"the {maker} experiments' reference runs were made by other code (key "
             f"{entry.get('key') or 'none'}, today {today}): `ros_ws/reproduce.sh --references` "
             "makes them again and says which experiments' runs changed")
-    return {str(k): str(v) for k, v in (entry.get("runs") or {}).items()}
 
 
 # --- configurations and their reference runs -----------------------------------------------
@@ -237,9 +241,8 @@ def make_references(experiments: Iterable[Any], table: dict[str, Any], parallel:
     new = dict(table)
     for maker in ("world", *sorted(by_maker)):
         key = maker_key(maker)
-        entry = dict(table.get(maker) or {})
-        old = {str(k): str(v) for k, v in (entry.get("runs") or {}).items()}
-        runs = dict(old) if entry.get("key") == key else {}
+        entry = table.get(maker) or {}
+        runs = kept_digests(entry) if entry.get("key") == key else {}
         todo = {c: s for c, s in by_maker.get(maker, {}).items() if c not in runs}
         if todo:
             say(f"{maker}: {len(todo)} reference run(s) to make, {parallel} side by side")
@@ -280,13 +283,13 @@ def experiment_fingerprint(experiment: Any, table: Mapping[str, Any],
     configs = configurations(experiment)
     entry = table.get(experiment.maker) or {}
     if todays:
-        kept_digests(table, experiment.maker)
+        check_todays(table, experiment.maker)
     elif not entry.get("key"):
         raise ReferencesOutdated(f"no reference of the {experiment.maker} experiments is kept")
     if experiment.maker == "world":
         behaviour = {"world": str(entry.get("key"))}
     else:
-        digests = {str(k): str(v) for k, v in (entry.get("runs") or {}).items()}
+        digests = kept_digests(entry)
         missing = sorted(set(configs.values()) - set(digests))
         if missing:
             raise ReferencesOutdated(
