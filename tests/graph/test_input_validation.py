@@ -344,7 +344,7 @@ def test_a_namespace_without_a_name_gets_the_default_folder(tmp_path):
 def test_a_learner_rule_between_parameters_is_refused_before_any_node_starts(
         capsys, tmp_path, assignments, message):
     """Each value is within its own range; together they break a rule the reference page
-    states beside the range (ros_glue.LEARNER_TIES)."""
+    states beside the range (core/config.py TIES)."""
     err = _refused(capsys, tmp_path, "sgim-d", *(a for x in assignments for a in ("--param", x)))
     assert message in err and len(err.splitlines()) == 1, err
 

@@ -15,6 +15,7 @@ same parameter file therefore runs the planar arms and the fishing world. Action
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
@@ -38,6 +39,34 @@ class Distances:
     min_region_width: float
     explore_distance: float
     failure_cost: float
+
+
+@dataclass(frozen=True)
+class Tie:
+    """A rule on fields beyond each one's own range. LearnerConfig refuses a configuration
+    that breaks it, naming the first of ``fields`` with ``refusal``; the reference page states
+    ``rule`` beside the range of every field it names (nodes/ros_glue.py)."""
+
+    fields: tuple[str, ...]
+    rule: str  # as the page states it
+    refusal: str  # why a configuration that breaks it is refused
+    holds: Callable[[LearnerConfig], bool]
+
+
+TIES = (
+    Tie(("zeta",), "even", "must be even (two equal halves in eq. 2)",
+        lambda c: c.zeta % 2 == 0),
+    Tie(("zeta", "max_goals_per_region"), "zeta <= max_goals_per_region",
+        "must not exceed max_goals_per_region", lambda c: c.zeta <= c.max_goals_per_region),
+    Tie(("min_goals_per_child", "max_goals_per_region"),
+        "2 * min_goals_per_child <= max_goals_per_region + 1",
+        "two children must fit in a full region",
+        lambda c: 2 * c.min_goals_per_child <= c.max_goals_per_region + 1),
+    Tie(("p_mode1", "p_mode2", "p_mode3"), "p_mode1 + p_mode2 + p_mode3 = 1",
+        "p_mode1 + p_mode2 + p_mode3 must equal 1",
+        lambda c: abs(c.p_mode1 + c.p_mode2 + c.p_mode3 - 1.0) <= 1e-9),
+)
+"""Every rule LearnerConfig checks that a field's own range cannot say."""
 
 
 @dataclass(frozen=True)
@@ -241,19 +270,14 @@ class LearnerConfig:
                      "memory_min_tail", "memory_max_tail", "local_neighbours"):
             if int(getattr(self, name)) < 1:
                 fail(name, "must be >= 1")
-        if self.zeta % 2:
-            fail("zeta", "must be even (two equal halves in eq. 2)")
-        if self.zeta > self.max_goals_per_region:
-            fail("zeta", "must not exceed max_goals_per_region")
         if self.min_goals_per_child < 1:
             fail("min_goals_per_child", "must be >= 1")
-        if 2 * self.min_goals_per_child > self.max_goals_per_region + 1:
-            fail("min_goals_per_child", "two children must fit in a full region")
         for name in ("p_mode1", "p_mode2", "p_mode3"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 fail(name, "must be a probability in [0, 1]")
-        if abs(self.p_mode1 + self.p_mode2 + self.p_mode3 - 1.0) > 1e-9:
-            fail("p_mode1", "p_mode1 + p_mode2 + p_mode3 must equal 1")
+        for tie in TIES:  # each field within its own range first
+            if not tie.holds(self):
+                fail(tie.fields[0], tie.refusal)
         for name in ("mode3_radius_noise", "reach_threshold_noise", "nm_initial_step",
                      "local_radius_action", "local_step_fraction",
                      "failure_cost_size", "imitation_epsilon", "memory_rebuild_fraction",

@@ -45,15 +45,9 @@ class DomainReservation:
     _run_lock: socket.socket | None = field(default=None, repr=False)
 
     @property
-    def fd(self) -> int:
-        """The pool reservation's descriptor: a child process that inherits it holds the
-        domain until it ends too."""
-        assert self._socket is not None, "this run's domain is lent by its caller"
-        return self._socket.fileno()
-
-    @property
     def fds(self) -> tuple[int, ...]:
-        """Every descriptor that holds the domain, for a run's processes to inherit."""
+        """Every descriptor that holds the domain: a child process that inherits them holds
+        it until it ends too."""
         return tuple(s.fileno() for s in (self._socket, self._run_lock) if s is not None)
 
     def release(self) -> None:
@@ -77,22 +71,19 @@ def reserve_domain(preferred: int | None = None) -> DomainReservation:
             raise ValueError(f"ROS_DOMAIN_ID must be in 0..232, got {preferred}")
         candidates.insert(0, preferred)
     for domain_id in candidates:
-        sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-        try:
-            sock.bind(("127.0.0.1", PORT_BASE + domain_id))
-        except OSError:
-            sock.close()
-            continue
-        return DomainReservation(domain_id, sock)
+        sock = _bind_pool_port(domain_id)
+        if sock is not None:
+            return DomainReservation(domain_id, sock)
     raise RuntimeError(
         f"no free ROS domain in {FIRST_DOMAIN}..{LAST_DOMAIN}: too many runs on this host?"
     )
 
 
-def _bind_run_lock(domain_id: int) -> socket.socket | None:
-    sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+def _bind(family: socket.AddressFamily, address: str | tuple[str, int]) -> socket.socket | None:
+    """A socket bound to ``address``, or None when another holds it."""
+    sock = socket.socket(family, socket.SOCK_STREAM)
     try:
-        sock.bind("\0" + RUN_LOCK.format(domain_id))
+        sock.bind(address)
     except OSError:
         sock.close()
         return None
@@ -100,13 +91,11 @@ def _bind_run_lock(domain_id: int) -> socket.socket | None:
 
 
 def _bind_pool_port(domain_id: int) -> socket.socket | None:
-    sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-    try:
-        sock.bind(("127.0.0.1", PORT_BASE + domain_id))
-    except OSError:
-        sock.close()
-        return None
-    return sock
+    return _bind(socket.AF_INET, ("127.0.0.1", PORT_BASE + domain_id))
+
+
+def _bind_run_lock(domain_id: int) -> socket.socket | None:
+    return _bind(socket.AF_UNIX, "\0" + RUN_LOCK.format(domain_id))
 
 
 def hold_run_domain(requested: int | None = None) -> DomainReservation:

@@ -6,7 +6,7 @@ action server of movement-by-movement jobs. Only translation lives here; algorit
 from __future__ import annotations
 
 from collections.abc import Awaitable, Callable, Sequence
-from dataclasses import dataclass, fields
+from dataclasses import fields
 from typing import Any
 
 import numpy as np
@@ -15,7 +15,13 @@ from rclpy.node import Node
 
 from sgim_msgs.msg import Region, RegionMap
 from sgim_nodes.bag.record_checks import vector_problem
-from sgim_nodes.core.config import INVERSE_MODELS, OPTIMISERS, STEP_CHECKS, LearnerConfig
+from sgim_nodes.core.config import (
+    INVERSE_MODELS,
+    OPTIMISERS,
+    STEP_CHECKS,
+    TIES,
+    LearnerConfig,
+)
 from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS  # noqa: F401 - for nodes
 from sgim_nodes.core.learners import CORE_LEARNER_NAMES
 from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
@@ -145,35 +151,11 @@ LEARNER_BOUNDS = {
 }
 
 
-@dataclass(frozen=True)
-class Tie:
-    """A rule that LearnerConfig checks on fields beyond each one's own range, as the
-    reference page states it beside the range of every field it names. LearnerConfig refuses a
-    configuration that breaks it, naming the first of ``fields`` with ``refusal``
-    (tests/docs/test_reference_rules.py holds the two together)."""
-
-    fields: tuple[str, ...]
-    rule: str  # as the page states it
-    refusal: str  # LearnerConfig's words for a configuration that breaks it
-
-
-LEARNER_TIES = (
-    Tie(("zeta",), "even", "must be even (two equal halves in eq. 2)"),
-    Tie(("zeta", "max_goals_per_region"), "zeta <= max_goals_per_region",
-        "must not exceed max_goals_per_region"),
-    Tie(("min_goals_per_child", "max_goals_per_region"),
-        "2 * min_goals_per_child <= max_goals_per_region + 1",
-        "two children must fit in a full region"),
-    Tie(("p_mode1", "p_mode2", "p_mode3"), "p_mode1 + p_mode2 + p_mode3 = 1",
-        "p_mode1 + p_mode2 + p_mode3 must equal 1"),
-)
-
-
 def learner_requirement(name: str) -> str:
-    """A learner parameter's range, then the rules that tie it to others (LEARNER_TIES), in
+    """A learner parameter's range, then the rules that tie it to others (config.TIES), in
     words: what its descriptor and the reference page say. Only the range is the Param's
     check; LearnerConfig checks the values together."""
-    ties = [tie.rule for tie in LEARNER_TIES if name in tie.fields]
+    ties = [tie.rule for tie in TIES if name in tie.fields]
     return "; ".join([str(LEARNER_BOUNDS[name]), *ties])
 
 
