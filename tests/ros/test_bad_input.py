@@ -33,7 +33,8 @@ def test_explorer_refuses_bad_demonstrations_and_goals(ros_processes, client):
 
     def send(action, outcome):
         demo = Demonstration(action=action, outcome=outcome)
-        return client.call(register, RegisterDemonstration.Request(demonstration=demo))
+        # Refused demonstrations store nothing: asked again if a reply is lost.
+        return client.ask(register, RegisterDemonstration.Request(demonstration=demo))
 
     short = send([0.1] * 5, [0.0, 0.0])
     assert not short.accepted and "24" in short.message

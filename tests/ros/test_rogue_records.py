@@ -34,7 +34,7 @@ def _cancel_all(client, name: str) -> None:
 
     cancel = client.node.create_client(CancelGoal, f"/{name}/_action/cancel_goal")
     if cancel.wait_for_service(timeout_sec=5):
-        client.call(cancel, CancelGoal.Request())
+        client.ask(cancel, CancelGoal.Request())
 
 
 def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
