@@ -34,7 +34,8 @@ sys.path[:0] = [str(REPO / "sgim_nodes"), str(REPO / "sim_bridge")]
 
 from sgim_nodes.core.config import INVERSE_MODELS, LearnerConfig  # noqa: E402
 from sgim_nodes.core.inverse_model import InverseModel  # noqa: E402
-from sgim_nodes.core.learners import inverse_model_for, make_learner  # noqa: E402
+from sgim_nodes.core.learner_registry import make_learner  # noqa: E402
+from sgim_nodes.core.learners import inverse_model_for  # noqa: E402
 from sgim_nodes.core.memory import Memory  # noqa: E402
 from sgim_nodes.core.planar_arm import ARMS  # noqa: E402
 from sgim_nodes.core.runner import build_world, run  # noqa: E402

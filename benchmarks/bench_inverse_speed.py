@@ -28,7 +28,13 @@ sys.path[:0] = [str(REPO / "sgim_nodes"), str(REPO / "sim_bridge")]
 from sgim_nodes.core.config import LearnerConfig  # noqa: E402
 from sgim_nodes.core.fit_cache import FitCache  # noqa: E402
 from sgim_nodes.core.inverse_model import InverseModel  # noqa: E402
-from sgim_nodes.core.learners import GOAL_BABBLERS, build_memory, make_learner  # noqa: E402
+from sgim_nodes.core.learner_registry import (  # noqa: E402
+    GOAL_BABBLING,
+    SGIM_D,
+    kinds,
+    make_learner,
+)
+from sgim_nodes.core.learners import build_memory  # noqa: E402
 from sgim_nodes.core.planar_arm import ARMS  # noqa: E402
 from sgim_nodes.core.runner import build_world, run  # noqa: E402
 
@@ -77,7 +83,8 @@ def evaluator_cpu(world_name: str, actions: np.ndarray, outcomes: np.ndarray,
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--world", default="arm-20", choices=[*ARMS, "fishing"])
-    p.add_argument("--learner", default="sgim-d", choices=GOAL_BABBLERS)
+    p.add_argument("--learner", default=SGIM_D,
+                   choices=[k.name for k in kinds() if k.host == GOAL_BABBLING])
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--movements", type=int, default=5000)
     a = p.parse_args(argv)

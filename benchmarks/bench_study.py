@@ -168,7 +168,7 @@ def runner_study(args: argparse.Namespace, out: Path) -> dict:
 def one_runner(learner: str, seed: int, movements: int, path: Path) -> None:
     """One runner run, writing the casts it made (its movements and kept-casts counters)."""
     from sgim_nodes.core import repeatable_casts
-    from sgim_nodes.core.learners import make_learner
+    from sgim_nodes.core.learner_registry import make_learner
     from sgim_nodes.core.runner import build_world, run
 
     made = []

@@ -305,7 +305,7 @@ def _signed(key: bytes, m) -> bool:
 def reference_movements(seed: int) -> list[dict]:
     """The movements of an uninterrupted run of the same seed and settings, made by the
     single-process runner (the graph makes its very movements)."""
-    from sgim_nodes.core.learners import make_learner
+    from sgim_nodes.core.learner_registry import make_learner
     from sgim_nodes.core.runner import build_world, run
 
     world = build_world("fishing", seed)

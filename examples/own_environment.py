@@ -18,7 +18,7 @@ import argparse
 import numpy as np
 
 from sgim_nodes.core.environment import MovementResult
-from sgim_nodes.core.learners import make_learner
+from sgim_nodes.core.learner_registry import make_learner
 from sgim_nodes.core.runner import World, run
 from sgim_nodes.core.scale import WorldScale, gaussian_noise_2d
 

@@ -62,7 +62,7 @@ def bag_digest(movements) -> str:
 def runner_records(learner: str, seed: int = SEED, movements: int = MOVEMENTS,
                    eval_every: int = EVAL_EVERY, **teacher) -> list[dict]:
     """The runner's records of the reference run of ``learner`` (or of another budget)."""
-    from sgim_nodes.core.learners import make_learner
+    from sgim_nodes.core.learner_registry import make_learner
     from sgim_nodes.core.runner import build_world, run
 
     world = build_world("fishing", seed)

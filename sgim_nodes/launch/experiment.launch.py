@@ -21,8 +21,10 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
+from sgim_nodes.core.learner_registry import SGIM_D, learner_names
+
 ARGUMENTS = (
-    ("learner", "sgim-d", "sgim-d, saggriac, demo-only or random"),
+    ("learner", SGIM_D, ", ".join(learner_names())),
     ("seed", "0", "seed of the run"),
     ("movements", "5000", "movement budget (the paper's: 5000)"),
     ("eval_every", "250", "movements between evaluations"),

@@ -48,7 +48,7 @@ def test_shares_count_the_asks_of_the_last_window():
 
 def test_a_runner_run_s_requests_and_choices_are_read_back():
     from sgim_nodes.core.acts_runner import experts_for, run_acts
-    from sgim_nodes.core.learners import make_learner
+    from sgim_nodes.core.learner_registry import make_learner
     from sgim_nodes.core.runner import build_world
 
     world = build_world("fishing", 3)

@@ -11,7 +11,7 @@ from sgim_nodes.core import runner
 from sgim_nodes.core.acts_runner import experts_for, run_acts
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.experts import Expert
-from sgim_nodes.core.learners import make_learner
+from sgim_nodes.core.learner_registry import make_learner
 from sgim_nodes.core.planar_arm import PlanarArm, teaching_set
 from sgim_nodes.core.random_streams import member_rng
 from sgim_nodes.core.runner import build_world

@@ -9,7 +9,8 @@ import pytest
 from sgim_nodes.core import runner
 from sgim_nodes.core.goal_reaching import GoalAttempt
 from sgim_nodes.core.imitation import IMITATION
-from sgim_nodes.core.learners import DEMONSTRATION, make_learner
+from sgim_nodes.core.learner_registry import make_learner
+from sgim_nodes.core.learners import DEMONSTRATION
 from sgim_nodes.core.planar_arm import PlanarArm
 from sgim_nodes.core.teaching import (
     DEMONSTRATION_CONTENTS,

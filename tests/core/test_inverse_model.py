@@ -6,7 +6,8 @@ import pytest
 
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.inverse_model import InverseModel, action_variance, reliability
-from sgim_nodes.core.learners import inverse_model_for, make_learner
+from sgim_nodes.core.learner_registry import make_learner
+from sgim_nodes.core.learners import inverse_model_for
 from sgim_nodes.core.memory import Memory
 from sgim_nodes.core.planar_arm import ARMS, benchmark_goals
 

@@ -5,7 +5,7 @@ import pytest
 from helpers import FlakyWorld
 
 from sgim_nodes.core.config import LearnerConfig
-from sgim_nodes.core.learners import LEARNER_NAMES, make_learner
+from sgim_nodes.core.learner_registry import compared_names, make_learner
 from sgim_nodes.core.planar_arm import PlanarArm
 from sgim_nodes.core.runner import build_world, run
 
@@ -28,7 +28,7 @@ def _drive(learner, world, n):
     return labels
 
 
-@pytest.mark.parametrize("name", LEARNER_NAMES)
+@pytest.mark.parametrize("name", compared_names())
 def test_failed_movements_count_but_are_not_stored(name):
     world = FlakyWorld(PlanarArm(seed=0), every=3)
     learner = make(name, 0)
@@ -128,7 +128,7 @@ def test_demo_only_varies_the_latest_demonstration():
             assert label == "imitation" and np.linalg.norm(a - demo) < 0.05
 
 
-@pytest.mark.parametrize("name", LEARNER_NAMES)
+@pytest.mark.parametrize("name", compared_names())
 def test_same_seed_same_run(name):
     def actions(seed):
         learner = make(name, seed)

@@ -6,7 +6,7 @@ from helpers import FlakyWorld, IdentityWorld
 
 from sgim_nodes.core.environment import Environment, Status
 from sgim_nodes.core.evaluator import Evaluator
-from sgim_nodes.core.learners import make_learner
+from sgim_nodes.core.learner_registry import make_learner
 from sgim_nodes.core.planar_arm import PlanarArm, benchmark_goals, teaching_set
 
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from sgim_nodes.core.learners import make_learner
+from sgim_nodes.core.learner_registry import make_learner
 from sgim_nodes.core.random_streams import STREAM_NAMES, component_rng
 from sgim_nodes.core.scale import unit_box
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from sgim_nodes.core.learners import make_learner
+from sgim_nodes.core.learner_registry import make_learner
 from sgim_nodes.core.planar_arm import PlanarArm
 from sgim_nodes.core.teaching import (
     ABILITY,

@@ -154,7 +154,8 @@ def test_bad_values_are_refused_by_name(overrides, message):
     ("sgim-d", "human", {"timing": "on-request"}, "needs the automatic teacher"),
     ("sgim-d", "external", {"timing": "on-request"}, "needs the automatic teacher"),
     ("demo-only", "automatic", {"timing": "on-request"}, "demo-only attempts no goals"),
-    ("demo-only", "automatic", {"demonstration_content": "goal-only"}, "shows none"),
+    ("demo-only", "automatic", {"demonstration_content": "goal-only"},
+     "cannot learn from a goal-only"),
     ("sgim-d", "automatic", {"demonstration_content": "both"}, "'demonstration_content'"),
     ("sgim-d", "automatic", {"timing": "when-asked"}, "'timing'"),
 ])

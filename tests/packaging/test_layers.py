@@ -114,6 +114,6 @@ def test_the_core_imports_no_world_teacher_or_ros():
 
 def test_relative_and_lazy_imports_are_read():
     core = imports()
-    assert "sgim_nodes.core.learners" in core["sgim_nodes.core.runner"]  # from .learners
+    assert "sgim_nodes.core.learner_registry" in core["sgim_nodes.core.runner"]  # relative
     assert "sgim_nodes.core.acts_runner" in core["sgim_nodes.core.runner"]  # in main()
     assert "sgim_nodes.core.portable" in core["sgim_nodes.core.acts_learner"]  # from . import

@@ -100,7 +100,7 @@ def test_social_modes_are_swept_for_the_learners_with_a_teacher_only():
 @pytest.mark.parametrize(("document", "message"), [
     ({"learner": "demo-only", "param": {"timing": "on-request"}}, "demo-only attempts no goals"),
     ({"learner": "demo-only", "param": {"demonstration_content": ["means-only", "goal-only"]}},
-     "shows none"),
+     "cannot learn from a goal-only"),
     ({"learner": "sgim-d", "teacher": "external", "param": {"timing": "on-request"}},
      "needs the automatic teacher"),
 ])
@@ -202,7 +202,8 @@ def test_shipped_sweep_files_expand():
 
 @pytest.mark.parametrize(("argv", "message"), [
     (["--param", "timing=on-request"], "demo-only: .*demo-only attempts no goals"),
-    (["--learners", "demo-only", "--param", "demonstration_content=goal-only"], "shows none"),
+    (["--learners", "demo-only", "--param", "demonstration_content=goal-only"],
+     "cannot learn from a goal-only"),
     (["--param", "timing=sometimes"], "'timing'"),
 ])
 def test_run_study_checks_every_param_for_every_learner_first(argv, message, capsys):

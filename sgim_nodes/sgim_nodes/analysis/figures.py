@@ -32,12 +32,12 @@ from matplotlib.patches import Circle, Rectangle
 
 from sgim_nodes.analysis.statistics import Curve, DemonstrationTimes
 from sgim_nodes.analysis.study import STATUS_OK, RunData, Study
+from sgim_nodes.core.learner_registry import GOAL_BABBLING, kinds
+from sgim_nodes.core.learner_registry import colour as learner_colour
 from sim_bridge.lake import ISOLATED_REGION, draw_shoreline
 
-COLOURS = {"sgim-d": "tab:red", "saggriac": "tab:blue", "random-goals": "tab:purple",
-           "demo-only": "tab:green",
-           "random": "tab:gray"}
-TREE_LEARNERS = ("sgim-d", "saggriac", "random-goals")
+TREE_LEARNERS = tuple(k.name for k in kinds() if k.host == GOAL_BABBLING)
+"""The learners whose runs draw a region tree of their own goals."""
 BINS = 40
 DPI = 110
 
@@ -50,7 +50,7 @@ OTHER_COLOURS = ("tab:orange", "tab:brown", "tab:pink", "tab:olive", "tab:cyan",
 
 
 def colour(learner: str, k: int) -> str:
-    return COLOURS.get(learner, OTHER_COLOURS[k % len(OTHER_COLOURS)])
+    return learner_colour(learner) or OTHER_COLOURS[k % len(OTHER_COLOURS)]
 
 
 def _outline_isolated(ax: plt.Axes, edge: str = "black") -> None:

@@ -35,6 +35,7 @@ from sgim_nodes.bag.reader import BagReadWarning, NotABagError
 from sgim_nodes.bag.records import RegionMapRecord
 from sgim_nodes.bag.run_folder import load_run_folder, segments
 from sgim_nodes.core.environment import PROCESS_CODES, Status
+from sgim_nodes.core.learner_registry import compared_names
 from sgim_nodes.provenance import fingerprint
 
 CACHE_NAME = "analysis_cache.npz"
@@ -44,7 +45,7 @@ OUTCOME_SIZE = 2
 PROCESS_IMITATION, PROCESS_DEMONSTRATION, PROCESS_EVALUATION = (
     PROCESS_CODES[label] for label in ("imitation", "demonstration", "evaluation"))
 STATUS_OK = int(Status.OK)
-LEARNER_ORDER = ("sgim-d", "saggriac", "random-goals", "demo-only", "random")
+LEARNER_ORDER = compared_names()  # the paper's learners first, in their declared order
 _RUN_NAME = re.compile(r"^(?P<learner>.+)-seed(?P<seed>\d+)$")
 _WANTED = ("movements", "evaluations", "region_map", "demonstrations", "demonstrations_taken",
            "run_status", "help_requests", "goals")

@@ -46,8 +46,6 @@ from .strategies import AUTONOMOUS, EMULATION, MIMICRY, Strategy, all_strategies
 from .strategy_choice import PairChoice, StrategyChooser
 from .strategy_regions import StrategyRegions
 
-ACTS = "sgim-acts"
-
 
 def _vec(x: np.ndarray | None) -> list[float] | None:
     return None if x is None else [float(v) for v in np.asarray(x).ravel()]
@@ -143,7 +141,6 @@ class SgimActsLearner(Learner):
     (default: autonomous, then mimicry and emulation of each teacher) are Strategy values,
     e.g. from strategies.parse_strategies."""
 
-    name = ACTS
     social = True
 
     def __init__(self, action_dim: int, outcome_dim: int, seed: int,

@@ -21,12 +21,13 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
-from .acts_learner import ACTS, SgimActsLearner
+from .acts_learner import SgimActsLearner
 from .config import LearnerConfig
 from .environment import is_success
 from .evaluator import Evaluator
 from .experts import ARM_EXPERTS, FISHING_EXPERTS, Expert, ExpertSpec, build_experts
-from .learners import make_learner
+from .learner_registry import SGIM_ACTS as ACTS
+from .learner_registry import make_learner
 from .planar_arm import ARMS
 
 EXPERTS_BY_WORLD: dict[str, tuple[ExpertSpec, ...]] = {

@@ -82,6 +82,11 @@ class Learner:
     def next_action(self) -> tuple[np.ndarray, str]:
         raise NotImplementedError
 
+    def aim(self) -> np.ndarray | None:
+        """The outcome the latest action aims at, if any: what a movement's record names as
+        its goal."""
+        return None
+
     def observe(self, action: np.ndarray, result: ResultLike) -> None:
         self.n_movements += 1
         if is_success(result):

@@ -1,4 +1,4 @@
-"""The four learners as compositions of the core parts, driven movement by movement.
+"""The learners as compositions of the core parts, driven movement by movement.
 
 API shared by all learners (what a ROS node calls):
   ``next_action() -> (action, process_label)``  the next movement to execute;
@@ -7,25 +7,21 @@ API shared by all learners (what a ROS node calls):
   ``inverse(goal)``                             the inverse model, for the evaluator.
 Successful movements are stored in memory; failed ones count as movements but are not stored.
 
-- "sgim-d":    SAGG-RIAC goal babbling + demonstrations: each demonstration is stored as own
-               experience, interrupts the goal attempt under way at the next movement
-               boundary, then is imitated ``imitation_count`` times; its outcome becomes an
-               attempted goal whose competence (best imitation) feeds the region tree.
-- "saggriac":  SAGG-RIAC goal babbling; demonstrations are ignored.
-- "random-goals": goals uniform in the outcome box with the same lower level ("SAGG-Random",
-               Baranes & Oudeyer 2013): the yardstick that tells what the interest adds.
-- "demo-only": always a small variation of the latest demonstration (random actions before
-               the first one).
-- "random":    uniform random actions; demonstrations are ignored.
-- "sgim-acts": chooses for each episode a goal region and a strategy (autonomous, mimicry or
-               emulation of one of its teachers), asking the teachers itself
-               (acts_learner.py).
+Each is declared, with its traits, in learner_registry.py: SGIM-D (goal babbling that stores,
+imitates and learns the interest of each demonstration: it interrupts the goal attempt under
+way at the next movement boundary, imitates the demonstration ``imitation_count`` times, and
+its outcome becomes an attempted goal whose competence, the best imitation's, feeds the region
+tree), SAGG-RIAC (goal babbling; demonstrations ignored), random goals (goals uniform in the
+outcome box, the same lower level: "SAGG-Random", Baranes & Oudeyer 2013, the yardstick that
+tells what the interest adds), demonstrations only (a small variation of the latest
+demonstration, random actions before the first), random actions, and SGIM-ACTS
+(acts_learner.py).
 """
 
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 
 import numpy as np
 
@@ -43,73 +39,62 @@ from .learner_base import inverse_model_for as inverse_model_for
 from .learner_base import inverse_or_centre as inverse_or_centre
 from .scale import WorldScale
 
-RANDOM = "random"
-LEARNER_NAMES = ("sgim-d", "saggriac", "random-goals", "demo-only", "random")
-"""The paper's learners and its yardsticks (the studies compare these)."""
-CORE_LEARNER_NAMES = (*LEARNER_NAMES, "sgim-acts")
-"""Every learner make_learner builds and the node graph runs: LEARNER_NAMES and SGIM-ACTS
-(acts_learner.py), which asks teachers of its own (experts.py)."""
-GOAL_BABBLERS = ("sgim-d", "saggriac", "random-goals")
-UNIFORM_GOALS = (0.0, 1.0, 0.0)  # random-goals: mode 2 only
-
-
-def goal_mode_probabilities(config: LearnerConfig, learner: str) -> tuple[float, float, float]:
-    """SAGG-RIAC's three modes; random-goals draws every goal uniformly (mode 2)."""
-    if learner == "random-goals":
-        return UNIFORM_GOALS
-    return (config.p_mode1, config.p_mode2, config.p_mode3)
+RANDOM_LABEL = "random"
+"""The process label of a random movement (environment.PROCESS_CODES)."""
 
 
 class RandomLearner(Learner):
-    name = "random"
-
     def next_action(self) -> tuple[np.ndarray, str]:
-        self._last_label = RANDOM
-        return self.rngs.random.uniform(-1.0, 1.0, self.action_dim), RANDOM
+        self._last_label = RANDOM_LABEL
+        return self.rngs.random.uniform(-1.0, 1.0, self.action_dim), RANDOM_LABEL
 
 
 class DemoOnlyLearner(Learner):
-    name = "demo-only"
     social = True
 
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         self.latest_demo: np.ndarray | None = None
+        self.latest_outcome: np.ndarray | None = None
 
     def on_demonstration(self, action: np.ndarray | None, outcome: np.ndarray | None) -> None:
         """Only an action can be varied: a goal-only demonstration (teaching.py) is refused."""
         if action is None:
-            raise ValueError("demo-only varies demonstrated actions: it cannot learn from a "
+            raise ValueError(f"{self.name} varies demonstrated actions: it cannot learn from a "
                              "goal-only demonstration")
         self.latest_demo = np.asarray(action, dtype=float).copy()
+        self.latest_outcome = None if outcome is None else np.asarray(outcome, dtype=float).copy()
         if outcome is not None:  # a means-only demonstration: the outcome was not shown
             self.memory.add(self.latest_demo, np.asarray(outcome, dtype=float), DEMONSTRATION)
 
+    def aim(self) -> np.ndarray | None:
+        """The demonstrated outcome its variations aim at (None before the first)."""
+        return None if self.latest_demo is None else self.latest_outcome
+
     def next_action(self) -> tuple[np.ndarray, str]:
         if self.latest_demo is None:
-            self._last_label = RANDOM
-            return self.rngs.random.uniform(-1.0, 1.0, self.action_dim), RANDOM
+            self._last_label = RANDOM_LABEL
+            return self.rngs.random.uniform(-1.0, 1.0, self.action_dim), RANDOM_LABEL
         self._last_label = IMITATION
         return perturb(self.latest_demo, self.config.imitation_epsilon, self.rngs.imitation), (
             IMITATION)
 
 
 class GoalBabblingLearner(Learner):
-    """SAGG-RIAC; with ``social=True`` it is SGIM-D; with ``name="random-goals"`` its goals
-    are uniform in the outcome box (the region tree still records them, for the plots)."""
-
-    name = "saggriac"
+    """SAGG-RIAC; with ``social=True`` it is SGIM-D; a learner declared with goal modes of its
+    own (random goals) draws its goals by them (the region tree still records them, for the
+    plots)."""
 
     def __init__(self, action_dim: int, outcome_dim: int, seed: int,
                  config: LearnerConfig | None = None, scale: WorldScale | None = None,
-                 social: bool = False, name: str | None = None) -> None:
+                 social: bool = False,
+                 goal_modes: tuple[float, float, float] | None = None) -> None:
         super().__init__(action_dim, outcome_dim, seed, config, scale)
         c = self.config
         self.social = social
-        self.name = name or ("sgim-d" if social else "saggriac")
         self.tree = region_tree_for(c, self.scale)
         self.probe_scale = probe_scale_for(c, self.scale, action_dim)
-        self.selector = GoalSelector(self.tree, goal_mode_probabilities(c, self.name),
+        self.selector = GoalSelector(self.tree, goal_modes or (c.p_mode1, c.p_mode2, c.p_mode3),
                                      c.distances(self.scale).mode3_radius)
         self.process: GoalAttempt | Imitation | None = None
         # (action, outcome, memory's distance to the outcome before it was stored); the action
@@ -205,28 +190,3 @@ class GoalBabblingLearner(Learner):
                 listener(process.goal, comp)
         return comp
 
-
-def make_learner(name: str, action_dim: int, outcome_dim: int, seed: int,
-                 config: LearnerConfig | None = None,
-                 scale: WorldScale | None = None, teachers: Sequence[str] = (),
-                 strategies: Sequence[str] | None = None) -> Learner:
-    """Build one of CORE_LEARNER_NAMES; `seed` fixes every random stream (see random_streams);
-    `scale` is the world's (its outcome box and noise, scale.py). sgim-acts only: the names of
-    the `teachers` it may ask and its `strategies` (names, default: every one of them)."""
-    if name == "sgim-acts":
-        from .acts_learner import SgimActsLearner
-        from .strategies import parse_strategies
-
-        chosen = (None if strategies is None
-                  else parse_strategies(strategies, config, teachers))
-        return SgimActsLearner(action_dim, outcome_dim, seed, config, scale, teachers, chosen)
-    if tuple(teachers) or strategies is not None:
-        raise ValueError(f"{name} takes no teachers or strategies: only sgim-acts chooses them")
-    if name in GOAL_BABBLERS:
-        return GoalBabblingLearner(action_dim, outcome_dim, seed, config, scale,
-                                   social=name == "sgim-d", name=name)
-    if name == "demo-only":
-        return DemoOnlyLearner(action_dim, outcome_dim, seed, config, scale)
-    if name == "random":
-        return RandomLearner(action_dim, outcome_dim, seed, config, scale)
-    raise ValueError(f"unknown learner {name!r}; choose one of {CORE_LEARNER_NAMES}")

@@ -35,7 +35,8 @@ from .help_request import (
     budget_for,
     check_timing,
 )
-from .learners import CORE_LEARNER_NAMES, Learner, make_learner
+from .learner_base import Learner
+from .learner_registry import SGIM_D, learner_kind, learner_names, make_learner
 from .random_streams import SEED_MAX, component_rng
 from .repeatable_casts import RepeatableCasts
 from .teaching import (
@@ -45,7 +46,6 @@ from .teaching import (
     DEFAULT_TEACHER_CHOICE,
     DEFAULT_TOLERANCE_NOISE,
     DEMONSTRATION_CONTENTS,
-    GOAL_ONLY,
     REACHED_RULES,
     TEACHER_CHOICES,
     Teacher,
@@ -98,12 +98,9 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
     check_choice(teacher_choice)
     check_content(demonstration_content)
     check_timing(timing)
-    if learner.name == "demo-only" and timing == ON_REQUEST:
-        raise ValueError("demo-only attempts no goals, so it never asks: timing on-request "
-                         "needs sgim-d")
-    if learner.name == "demo-only" and demonstration_content == GOAL_ONLY:
-        raise ValueError("demo-only varies demonstrated actions: it needs them shown "
-                         "(demonstration_content means-and-goal or means-only)")
+    refusal = learner_kind(learner.name).refusal(timing, demonstration_content)
+    if refusal:
+        raise ValueError(refusal)
     if teacher_turns and timing == ON_REQUEST:
         raise ValueError("teachers taking turns speak at their boundaries: timing on-request "
                          "has one teacher")
@@ -207,7 +204,7 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         prog="sgim-learn",
         description="Run one learner on one world without ROS and log every movement and "
                     "evaluation as JSON lines (flushed as it goes).")
-    p.add_argument("--learner", choices=CORE_LEARNER_NAMES, default="sgim-d",
+    p.add_argument("--learner", choices=learner_names(), default=SGIM_D,
                    help="which learner to run (default: %(default)s)")
     p.add_argument("--strategies", default=None,
                    help="sgim-acts: comma-separated strategies, e.g. autonomous,mimicry:west "
@@ -271,19 +268,18 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         p.error("--eval-every must be >= 0")
     if args.teacher_tolerance_noise < 0:
         p.error("--teacher-tolerance-noise must be >= 0")
-    if args.strategies is not None and args.learner != "sgim-acts":
-        p.error("--strategies needs --learner sgim-acts")
+    kind = learner_kind(args.learner)
+    if args.strategies is not None and not kind.chooses_teachers:
+        p.error(f"--strategies: {args.learner} takes no strategies, it does not choose its "
+                "teachers")
     if args.pond_radius is not None and args.env != "fishing":
         p.error("--pond-radius needs --env fishing")
-    if args.learner == "demo-only" and args.timing == ON_REQUEST:
-        p.error("demo-only attempts no goals, so it never asks: --timing on-request needs "
-                "sgim-d")
     if args.teacher_turns and args.timing == ON_REQUEST:
         p.error("--teacher-turns speak at their boundaries: --timing on-request has one "
                 "teacher")
-    if args.learner == "demo-only" and args.demonstration_content == GOAL_ONLY:
-        p.error("demo-only varies demonstrated actions: --demonstration-content goal-only "
-                "shows none")
+    refusal = kind.refusal(args.timing, args.demonstration_content)
+    if refusal:
+        p.error(refusal)
     return args
 
 
@@ -303,7 +299,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"error: --env {args.env} needs {e.name}: {e}", file=sys.stderr)
         return 2
     config = LearnerConfig()
-    if args.learner == "sgim-acts":  # its teachers answer requests: core/acts_runner.py
+    if learner_kind(args.learner).chooses_teachers:  # they answer: core/acts_runner.py
         from .acts_runner import main_acts
 
         return main_acts(args, world, config)

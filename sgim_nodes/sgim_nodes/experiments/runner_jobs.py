@@ -35,7 +35,8 @@ import numpy as np
 
 from sgim_nodes.core import portable
 from sgim_nodes.core.config import LearnerConfig
-from sgim_nodes.core.learners import LEARNER_NAMES, GoalBabblingLearner, make_learner
+from sgim_nodes.core.learner_registry import compared_names, make_learner
+from sgim_nodes.core.learners import GoalBabblingLearner
 from sgim_nodes.core.planar_arm import ARMS, reach_of
 from sgim_nodes.core.runner import World, build_world, run
 from sgim_nodes.core.teaching import DEFAULT_REACHED_RULE, REACHED_RULES
@@ -117,9 +118,9 @@ def expand_jobs(runs: Mapping[str, Any], where: str) -> list[RunnerJob]:
             raise ValueError(f"{here}: a block names 'world' and 'learner', and only them")
         for world in _as_list(block["world"]):
             for learner in _as_list(block["learner"]):
-                if world not in WORLDS or learner not in LEARNER_NAMES:
+                if world not in WORLDS or learner not in compared_names():
                     raise ValueError(f"{here}: world must be one of {', '.join(WORLDS)} "
-                                     f"and learner one of {', '.join(LEARNER_NAMES)}")
+                                     f"and learner one of {', '.join(compared_names())}")
                 jobs += [RunnerJob(world, learner, seed, movements, eval_every, goals,
                                    tuple(sorted(config.items())), rule) for seed in seeds]
     names = [job.name for job in jobs]

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import yaml
 
-from sgim_nodes.core.learners import LEARNER_NAMES
+from sgim_nodes.core.learner_registry import compared_names
 from sgim_nodes.graph.description import RunOptions, parameters
 from sgim_nodes.graph.overrides import parse_assignments
 from sgim_nodes.graph.processes import ProcessGroup
@@ -79,7 +79,8 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         prog="ros_ws/run_study.sh",
         description="Run learners x seeds through the node graph (the paper's comparison), "
                     "resumable: finished runs are skipped.")
-    p.add_argument("--learners", nargs="+", choices=LEARNER_NAMES, default=list(LEARNER_NAMES),
+    p.add_argument("--learners", nargs="+", choices=compared_names(),
+                   default=list(compared_names()),
                    help="learners to run (default: all five)")
     p.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 (default: 10)")
     p.add_argument("--first-seed", type=int, default=0, help="first seed (default: 0)")

@@ -24,15 +24,11 @@ import yaml
 
 from sgim_nodes.bag.writer import STORAGES  # the recorder's bag formats, named once
 from sgim_nodes.core.config import LearnerConfig
-from sgim_nodes.core.learners import CORE_LEARNER_NAMES, GOAL_BABBLERS
+from sgim_nodes.core.learner_registry import SGIM_ACTS, learner_kind, learner_names
 from sgim_ros.params import Param, ParameterError
 
 LEARNER_CONFIG = Path(__file__).resolve().parents[2] / "config" / "learner.yaml"
-SOCIAL = ("sgim-d", "demo-only")
-ACTS = "sgim-acts"  # nodes/ros_glue.ACTS
 WEB_EXPERT = "web"  # teacher/web_expert.WEB_EXPERT: the web teacher among SGIM-ACTS's teachers
-LEARNER_NAMES = CORE_LEARNER_NAMES
-"""The learners the graph runs: every one the core builds."""
 TEACHERS = ("automatic", "human", "web", "external")
 # The arbiter only knows synchronous (automatic) and asynchronous (human) demonstrations.
 ARBITER_TEACHER = {"automatic": "automatic", "human": "human", "web": "human",
@@ -121,8 +117,8 @@ class RunOptions:
 
     def __post_init__(self) -> None:
         problems = []
-        if self.learner not in LEARNER_NAMES:
-            problems.append(f"learner must be one of {', '.join(LEARNER_NAMES)}, "
+        if self.learner not in learner_names():
+            problems.append(f"learner must be one of {', '.join(learner_names())}, "
                             f"got {self.learner!r}")
         if self.teacher not in TEACHERS:
             problems.append(f"teacher must be one of {', '.join(TEACHERS)}, got "
@@ -170,16 +166,18 @@ def graph(learner: str, teacher: str = "automatic", markers: bool = True,
     sgim-acts, an expert per name of `teachers` (None: the default ones), the web teacher
     answering as "web" when the run's teacher is the web page."""
     names = ["recorder", "sim_bridge", "evaluator"] + (["markers"] if markers else [])
-    if learner in GOAL_BABBLERS or learner == ACTS:
+    kind = learner_kind(learner)
+    if kind.goal_babbling:
         names += ["interest_computer", "goal_generator", "low_level_explorer"]
-    if learner == ACTS:
+    if kind.chooses_teachers:
         asked = acts_teachers({}) if teachers is None else teachers
         experts = [NODES["web_teacher"] if name == WEB_EXPERT and teacher == "web"
                    else NODES["expert"].in_namespace(name) for name in asked]
         return [*(NODES[name] for name in names), NODES["imitation"], *experts,
                 NODES[ARBITER]]
-    if learner in SOCIAL:
-        names.append("imitation")
+    if kind.social:
+        if kind.imitates:
+            names.append("imitation")
         teacher_node = {"automatic": "teacher", "human": "human_input",
                         "web": "web_teacher"}.get(teacher)
         if teacher_node:
@@ -315,23 +313,22 @@ def masked(values: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def social_mode_problems(options: RunOptions, values: Mapping[str, Any]) -> list[str]:
-    """The social modes (issue 14) a run's learner and teacher cannot play, as the runner
-    refuses them: on-request needs the automatic teacher (it answers the asks) and a learner
-    that attempts goals; demo-only varies demonstrated actions, so a goal-only teacher gives
-    it nothing. Learners without a teacher ignore both settings."""
-    if options.learner not in SOCIAL:
+    """The social modes a run's learner and teacher cannot play, as the runner refuses them
+    (core/learner_registry.LearnerKind.refusal): on-request needs the automatic teacher (it
+    answers the asks) and a learner that asks; a learner takes only the demonstration contents
+    it declares. Learners without a teacher ignore both settings."""
+    kind = learner_kind(options.learner)
+    if not kind.social:
         return []
     problems = []
-    if values.get("timing") == "on-request":
-        if options.teacher != "automatic":
-            problems.append("timing 'on-request' needs the automatic teacher (--teacher "
-                            f"automatic), not {options.teacher!r}: it answers the asks")
-        if options.learner == "demo-only":
-            problems.append("timing 'on-request': demo-only attempts no goals, so it never "
-                            "asks (sgim-d does)")
-    if options.learner == "demo-only" and values.get("demonstration_content") == "goal-only":
-        problems.append("demonstration_content 'goal-only': demo-only varies demonstrated "
-                        "actions, and a goal-only demonstration shows none")
+    timing = values.get("timing")
+    if timing == "on-request" and options.teacher != "automatic":
+        problems.append("timing 'on-request' needs the automatic teacher (--teacher "
+                        f"automatic), not {options.teacher!r}: it answers the asks")
+    for refusal in (kind.refusal(timing=timing),
+                    kind.refusal(content=values.get("demonstration_content"))):
+        if refusal:
+            problems.append(refusal)
     return problems
 
 
@@ -348,24 +345,25 @@ def parameters(options: RunOptions, node_overrides: Mapping[str, Mapping[str, An
             f"parameter '{name}' is set by {OPTION_PARAMETERS[name]}, not as a parameter"
             for name in clash))
     values = {**learner_defaults(), **options.overrides}
-    if options.learner == ACTS and options.teacher == "web":  # the page is one of them
+    kind = learner_kind(options.learner)
+    if kind.chooses_teachers and options.teacher == "web":  # the page is one of them
         names = acts_teachers(options.overrides)
         values["teachers"] = ",".join([*names, *([] if WEB_EXPERT in names else [WEB_EXPERT])])
     values.update(
         learner=options.learner, seed=options.seed, movements=options.movements,
         eval_every=options.eval_every, demonstration_period=options.period,
-        teacher=ARBITER_TEACHER[options.teacher] if options.learner in SOCIAL else "none",
+        teacher=ARBITER_TEACHER[options.teacher] if kind.social else "none",
         storage=options.storage, wait_for_recorder=True,
         movement_listeners=",".join(movement_listeners(options, acts_teachers(values))),
         wait_for_teacher=options.wait_for_teacher)
     if options.output:
         values["output"] = options.output
-    if options.teacher == "web" and options.learner in (*SOCIAL, ACTS):
+    if options.teacher == "web" and (kind.social or kind.chooses_teachers):
         values.update(host=options.web_host, port=options.web_port, token=options.web_token,
                       address_file=options.web_address_file, linger=float(options.web_linger))
-    if options.learner == ACTS and WEB_EXPERT in acts_teachers(values):
+    if kind.chooses_teachers and WEB_EXPERT in acts_teachers(values):
         if options.teacher != "web":
-            raise ParameterError(f"teacher '{WEB_EXPERT}' among sgim-acts's teachers is the "
+            raise ParameterError(f"teacher '{WEB_EXPERT}' among {SGIM_ACTS}'s teachers is the "
                                  "web page: run it with --teacher web")
         values["expert"] = True
         values.setdefault("teacher_timeout", 3600.0)  # a person answers, not a node

@@ -17,6 +17,7 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
+from sgim_nodes.core.learner_registry import SGIM_D
 from sgim_nodes.graph.description import NodeSpec
 
 REPO = Path(__file__).resolve().parents[3]
@@ -214,7 +215,7 @@ def arbiter_ready_endpoints() -> set[Endpoint]:
     """The arbiter asks a ready service in a loop: the names are graph_startup's table."""
     from sgim_nodes.nodes.graph_startup import arbiter_graph
 
-    expected = arbiter_graph("sgim-d", True, True, True, True, execute=None, reach=None,
+    expected = arbiter_graph(SGIM_D, True, True, True, True, execute=None, reach=None,
                              register=None, imitate=None)
     return {Endpoint("calls", service, "sgim_msgs/srv/RecorderReady",
                      note=f"when the run has {who}")

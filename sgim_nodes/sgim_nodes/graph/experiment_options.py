@@ -12,7 +12,7 @@ import secrets
 from collections.abc import Sequence
 from pathlib import Path
 
-from sgim_nodes.core.learners import CORE_LEARNER_NAMES as LEARNER_NAMES
+from sgim_nodes.core.learner_registry import learner_names
 from sgim_nodes.graph.description import STORAGES, TEACHERS
 from sgim_nodes.graph.run_folder import run_name_problem
 from sgim_ros.command_line import BriefParser, shown
@@ -69,7 +69,7 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                     "in runs/. Example: ros_ws/run_experiment.sh sgim-d --seed 3 "
                     "--movements 5000. Exit codes: 0 finished, 1 failed, 2 refused, "
                     "130 Ctrl-C.")
-    p.add_argument("learner", choices=LEARNER_NAMES, nargs="?",
+    p.add_argument("learner", choices=learner_names(), nargs="?",
                    help="which learner to run (not with --resume)")
     p.add_argument("--resume", type=Path, metavar="RUN_DIR",
                    help="resume an interrupted or failed run from its recordings, to its "

@@ -21,8 +21,8 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
+from sgim_nodes.core.learner_registry import learner_kind, learner_names
 from sgim_nodes.graph.description import (
-    ACTS,
     NODES,
     OPTION_PARAMETERS,
     NodeSpec,
@@ -87,24 +87,27 @@ def run_graph(learner: str, teacher: str, markers: bool) -> list[NodeSpec]:
     teachers are those its parameters() gives the run (the web page among them with
     --teacher web)."""
     options = RunOptions(learner, teacher=teacher, markers=markers)
-    teachers = acts_teachers(parameters(options).shared) if learner == ACTS else None
+    chooses = learner_kind(learner).chooses_teachers
+    teachers = acts_teachers(parameters(options).shared) if chooses else None
     return graph(learner, teacher, markers, teachers)
 
 
 def who_runs(spec: NodeSpec) -> str:
     """Which learners' graphs hold the node, with the teacher or markers it needs."""
-    from sgim_nodes.graph.description import LEARNER_NAMES, TEACHERS
+    from sgim_nodes.graph.description import TEACHERS
+
+    names = learner_names()
 
     def holds(nodes: list[NodeSpec]) -> bool:  # in any namespace (SGIM-ACTS's experts)
         return any((s.package, s.executable) == (spec.package, spec.executable) for s in nodes)
 
-    runs = {(learner, teacher, markers) for learner in LEARNER_NAMES for teacher in TEACHERS
+    runs = {(learner, teacher, markers) for learner in names for teacher in TEACHERS
             for markers in (True, False) if holds(run_graph(learner, teacher, markers))}
-    learners = [name for name in LEARNER_NAMES if any(r[0] == name for r in runs)]
+    learners = [name for name in names if any(r[0] == name for r in runs)]
     teachers = sorted({r[1] for r in runs}, key=TEACHERS.index)
     if not runs:
         return "no run (started by hand)"
-    text = "every learner" if len(learners) == len(LEARNER_NAMES) else ", ".join(learners)
+    text = "every learner" if len(learners) == len(names) else ", ".join(learners)
     if len(teachers) < len(TEACHERS):
         text += f" (teacher {', '.join(teachers)})"
     if not any(not r[2] for r in runs):

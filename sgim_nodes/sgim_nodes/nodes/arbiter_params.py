@@ -12,7 +12,6 @@ from sgim_nodes.nodes.sim_client import SIM_CLIENT_PARAMS
 from sgim_ros.params import Param, at_least, non_negative, one_of, positive
 from sim_bridge.data_params import TEACHING_SET_FILE
 
-SOCIAL = ("sgim-d", "demo-only")
 TEACHER_TIMEOUT_MIN = 1.0
 """The shortest wait for a teacher, in seconds. An answer comes only after the teacher has
 heard the movements up to the turn and cast, in its own world, the learner's model for the

@@ -34,7 +34,8 @@ from sgim_nodes.bag.record_checks import Limits
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.bag.validation import LiveGate
 from sgim_nodes.core.goal_selection import GoalSelector
-from sgim_nodes.core.learners import goal_mode_probabilities, region_tree_for
+from sgim_nodes.core.learner_registry import goal_mode_probabilities
+from sgim_nodes.core.learners import region_tree_for
 from sgim_nodes.core.live_regions import LiveRegions
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.nodes.ros_glue import (

@@ -18,8 +18,7 @@ from rclpy.task import Future
 
 from sgim_msgs.srv import RecorderReady
 from sgim_nodes.bag.types import RECORDED_TOPICS
-from sgim_nodes.core.learners import GOAL_BABBLERS
-from sgim_nodes.nodes.ros_glue import ACTS
+from sgim_nodes.core.learner_registry import learner_kind
 from sgim_ros.entry import first_of
 
 POLL_SECONDS = 0.1
@@ -47,13 +46,15 @@ def arbiter_graph(learner: str, social: bool, automatic: bool, wait_for_recorder
     teacher heard, and every node that listens to the run's records hearing it from its
     first record (sgim_ros/ready.py); for sgim-acts, the expert of each of its `teachers`
     listening to its requests."""
-    acts = learner == ACTS
+    kind = learner_kind(learner)
+    acts = kind.chooses_teachers
+    imitating = kind.imitates and (social or acts)  # demonstrations come or are asked for
     expected = ExpectedGraph(servers=[(execute, "execute_action")])
-    if learner in GOAL_BABBLERS or acts:
+    if kind.goal_babbling:
         expected.servers.append((reach, "reach_goal"))
         if social or acts:
             expected.servers.append((register, "register_demonstration"))
-    if social or acts:
+    if imitating:
         expected.servers.append((imitate, "imitate"))
     # The teacher's checks too: the recorder must have matched their publisher before the
     # first turn, at movement 0 (sgim_ros/ready.py asks only about publishers seen).
@@ -66,9 +67,9 @@ def arbiter_graph(learner: str, social: bool, automatic: bool, wait_for_recorder
         (wait_for_recorder, "recorder_ready",
          "the recorder node (or set wait_for_recorder to false)"),
         (wait_for_evaluation, "evaluator_ready", "the evaluator node"),
-        (learner in GOAL_BABBLERS or acts, "explorer_ready", "the low_level_explorer node"),
-        (learner in GOAL_BABBLERS or acts, "goal_generator_ready", "the goal_generator node"),
-        (social or acts, "imitation_ready", "the imitation node"),
+        (kind.goal_babbling, "explorer_ready", "the low_level_explorer node"),
+        (kind.goal_babbling, "goal_generator_ready", "the goal_generator node"),
+        (imitating, "imitation_ready", "the imitation node"),
         (automatic, "teacher_ready", "the teacher node"),
         *((True, f"/{name}/expert_ready", f"the expert node of teacher {name} (ros2 run "
            f"teacher expert --ros-args -r __ns:=/{name})") for name in teachers),

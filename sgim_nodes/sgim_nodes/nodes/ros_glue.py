@@ -23,7 +23,7 @@ from sgim_nodes.core.config import (
     LearnerConfig,
 )
 from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS  # noqa: F401 - for nodes
-from sgim_nodes.core.learners import CORE_LEARNER_NAMES
+from sgim_nodes.core.learner_registry import SGIM_ACTS, SGIM_D, learner_names
 from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
 from sgim_nodes.core.region_tree import SPLIT_QUALITIES
 from sgim_nodes.core.scale import WorldScale, unit_box
@@ -41,7 +41,7 @@ from sgim_ros.params import (
 from sim_bridge.scaling import OUTCOME_NOISE
 
 ACTION_SIZE = 24  # the fishing world's; a parameter of every node that checks sizes
-ACTS = "sgim-acts"  # core/acts_learner.ACTS, named here so a node imports its module when needed
+ACTS = SGIM_ACTS
 OUTCOME_SIZE = 2
 JOB_RESULT_SECONDS = 1
 """How long a job server keeps a finished job's result (rclpy's default is 900 s). Every job's
@@ -110,7 +110,7 @@ def check_vector(values: Sequence[float], size: int, what: str, bound: float = 1
 
 
 COMMON_PARAMS = (
-    Param("learner", "sgim-d", "which learner the graph runs", one_of(*CORE_LEARNER_NAMES)),
+    Param("learner", SGIM_D, "which learner the graph runs", one_of(*learner_names())),
     Param("seed", 0, "seed of the run; each node derives its own random stream from it",
           seed_range),
     Param("action_size", ACTION_SIZE, "numbers per action (the world's action size)",

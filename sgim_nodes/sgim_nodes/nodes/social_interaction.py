@@ -3,15 +3,19 @@
 It owns the movement count and runs one job at a time: goal attempts (the explorer's
 `reach_goal` action, which asks the goal generator for each goal itself and goes on from goal
 to goal up to the arbiter's next boundary), an imitation (`imitate`), or a random movement,
-according to the learner:
-  sgim-d     goal babbling; each demonstration is registered in the explorer's memory,
-             imitated `imitation_count` times, and its outcome enters the interest computation
-             with the competence of the best imitation;
-  saggriac   goal babbling only;
-  demo-only  variations of the latest demonstration (random movements before the first);
-  random     random movements;
-  sgim-acts  goal babbling whose goals each come with a strategy: an autonomous one is
-             attempted by the explorer, a social one asks its teacher (acts_episodes.py).
+according to how the learner's declaration says the graph hosts it
+(core/learner_registry.py):
+  goal babbling  the explorer's goal attempts; a social learner's demonstrations are
+                 registered in the explorer's memory, imitated `imitation_count` times, and
+                 their outcomes enter the interest computation with the competence of the best
+                 imitation (SGIM-D);
+  episodes       goal babbling whose goals each come with a strategy: an autonomous one is
+                 attempted by the explorer, a social one asks its teacher (SGIM-ACTS,
+                 acts_episodes.py);
+  in the arbiter the core learner itself, built here as the runner builds it: its next action
+                 is executed through the simulator and its result told back, movement by
+                 movement, and the demonstrations it takes are given to it (random actions,
+                 demonstrations only, and a learner of another package).
 A demonstration preempts the intrinsic loop at the next movement boundary: with the automatic
 teacher (`teacher: automatic`) the arbiter knows the teacher's period and stops every job at
 the teacher's boundaries, then waits for its word (a demonstration, or an empty one when it has
@@ -55,19 +59,19 @@ from rclpy.action import ActionClient
 from rclpy.duration import Duration
 
 from sgim_msgs.action import Imitate, ReachGoal
-from sgim_msgs.msg import Competence, Demonstration, Evaluation, Movement, RunStatus
+from sgim_msgs.msg import Competence, Demonstration, Evaluation, RunStatus
 from sgim_msgs.srv import ExecuteAction, RegisterDemonstration
 from sgim_nodes.bag.record_checks import Limits, teaching_set_size
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.bag.validation import LiveGate
 from sgim_nodes.core.competence import competence
+from sgim_nodes.core.environment import PROCESS_CODES, MovementResult
 from sgim_nodes.core.help_request import ON_REQUEST
-from sgim_nodes.core.learners import GOAL_BABBLERS
-from sgim_nodes.core.random_streams import component_rng
+from sgim_nodes.core.learner_registry import IN_ARBITER, learner_kind, make_learner
 from sgim_nodes.core.teaching import GOAL_ONLY, MEANS_ONLY
 from sgim_nodes.nodes.acts_episodes import ActsEpisodes
 from sgim_nodes.nodes.arbiter_jobs import JobSlot, Waits
-from sgim_nodes.nodes.arbiter_params import PARAMS, SOCIAL
+from sgim_nodes.nodes.arbiter_params import PARAMS
 from sgim_nodes.nodes.demonstration_inbox import DemonstrationInbox, shown
 from sgim_nodes.nodes.graph_startup import (
     ExpectedGraph,
@@ -79,7 +83,6 @@ from sgim_nodes.nodes.graph_startup import (
 from sgim_nodes.nodes.help_asks import HelpAsks
 from sgim_nodes.nodes.pace import PaceControl
 from sgim_nodes.nodes.ros_glue import (
-    ACTS,
     AsyncNode,
     declare_learner,
     floats,
@@ -100,28 +103,31 @@ class SocialInteraction(AsyncNode):
         values, self.config = declare_learner(self, PARAMS)
         self.p = values
         self.learner = values["learner"]
-        self.acts = self.learner == ACTS
+        self.kind = learner_kind(self.learner)
+        self.acts = self.kind.chooses_teachers
         self.total = values["movements"]
-        social = self.learner in SOCIAL and values["teacher"] != "none"
+        social = self.kind.social and values["teacher"] != "none"
         self.automatic = social and values["teacher"] == "automatic"
         on_request = social and values["timing"] == ON_REQUEST
         if on_request and not self.automatic:
             raise ParameterError("timing 'on-request' needs the automatic teacher (teacher: "
                                  "automatic): it answers the learner's help requests")
-        if on_request and self.learner == "demo-only":
-            raise ParameterError("demo-only attempts no goals, so it never asks: timing "
-                                 "'on-request' needs sgim-d")
+        if on_request and self.kind.refusal(timing=ON_REQUEST):
+            raise ParameterError(self.kind.refusal(timing=ON_REQUEST))
         self.sync_period = values["demonstration_period"] if (
             self.automatic and not on_request) else 0
         self.social = social
         self.distances = self.config.distances(world_scale(values))
-        self.rng = component_rng(values["seed"], "random")
+        # The core learner itself, when the arbiter hosts it (module docstring).
+        self.hosted = (make_learner(self.learner, values["action_size"],
+                                    values["outcome_size"], values["seed"], self.config,
+                                    world_scale(values))
+                       if self.kind.host == IN_ARBITER else None)
         self.count = 0
         self.goals_folded = 0  # competences published so far (by the explorer and by us)
         # Goals per reach_goal job: with timing on-request, each attempt ends at the arbiter,
         # which tells the help rule (help_asks.py) before it decides the next cap.
         self.goals_per_job = 1 if on_request else values["goals_per_job"]
-        self.latest_demo: Demonstration | None = None
         self.evaluated: set[int] = set()
         self.turns_taken: set[int] = set()  # teacher boundaries already handled
         self.finished, self.exit_code = False, 0
@@ -166,12 +172,8 @@ class SocialInteraction(AsyncNode):
         if self.asks is not None:
             self.asks.resume(point.records, point.count)
         demo = point.latest_demonstration
-        if demo is not None and self.learner == "demo-only":
-            self.latest_demo = Demonstration(
-                index=demo.index, movement_index=demo.movement_index,
-                action=floats(demo.action), outcome=floats(demo.outcome),
-                teaching_set_index=demo.teaching_set_index, source=demo.source,
-                content=demo.content, help_request=demo.help_request)
+        if demo is not None and self.hosted is not None and self.social:
+            self.hosted.on_demonstration(*shown_parts(demo))
         self.get_logger().info(f"resuming at movement {self.count}/{self.total}")
 
     # --- events -------------------------------------------------------------------------
@@ -267,12 +269,10 @@ class SocialInteraction(AsyncNode):
             cap = self.cap()
             if self.acts:  # a social goal comes back from the explorer: its episode
                 await self.episodes.after_attempt(await self.goal_attempt(cap))
-            elif self.learner in GOAL_BABBLERS:
-                await self.goal_attempt(cap)
-            elif self.learner == "demo-only" and self.latest_demo is not None:
-                await self.imitation(self.latest_demo, cap)
+            elif self.hosted is not None:
+                await self._hosted_movement()
             else:
-                await self._random_movement()
+                await self.goal_attempt(cap)
             self._paced()
             self.progress.moved()
 
@@ -311,12 +311,12 @@ class SocialInteraction(AsyncNode):
             return
         self.get_logger().info(f"demonstration {demo.index} at movement {self.count} "
                                f"({demo.content}, outcome {floats(demo.outcome)})")
-        if self.learner == "demo-only":
-            if demo.content == GOAL_ONLY:
-                self.inbox.refuse(demo, "demo-only varies demonstrated actions: a goal-only "
-                             "demonstration shows none", always=True)
+        if self.hosted is not None:  # the core learner says what it can take
+            try:
+                self.hosted.on_demonstration(*shown_parts(demo))
+            except ValueError as refusal:
+                self.inbox.refuse(demo, str(refusal), always=True)
                 return
-            self.latest_demo = demo
             self.publish_taken(demo)
             return
         if demo.content == GOAL_ONLY:  # emulation: the outcome becomes the next goal
@@ -389,11 +389,16 @@ class SocialInteraction(AsyncNode):
         self.count += result.movements_used
         return result
 
-    async def _random_movement(self) -> None:
+    async def _hosted_movement(self) -> None:
+        """One movement of the hosted core learner: its action executed, its result told."""
+        action, label = self.hosted.next_action()
+        aim = self.hosted.aim()
         index = self.count + 1
-        await self.sim.execute(ExecuteAction.Request(
-            action=floats(self.rng.uniform(-1.0, 1.0, self.p["action_size"])),
-            process=Movement.PROCESS_RANDOM, movement_index=index, record=True))
+        response = await self.sim.execute(ExecuteAction.Request(
+            action=floats(action), process=PROCESS_CODES[label], movement_index=index,
+            goal=[] if aim is None else floats(aim), record=True))
+        outcome = vec(response.outcome) if len(response.outcome) else None
+        self.hosted.observe(action, MovementResult(outcome, response.status))
         self.count = index
 
     def publish_taken(self, demo: Demonstration) -> None:
@@ -407,6 +412,14 @@ class SocialInteraction(AsyncNode):
     def say_refusal(self, line: str) -> None:
         self.get_logger().warning(line)
         self.progress.say(RunStatus.STATE_RUNNING, line)
+
+
+def shown_parts(demo) -> tuple:
+    """(action, outcome) of a demonstration as a core learner takes them: None for the part
+    its content does not show (core/teaching.py)."""
+    action = vec(demo.action) if len(demo.action) and demo.content != GOAL_ONLY else None
+    outcome = vec(demo.outcome) if len(demo.outcome) and demo.content != MEANS_ONLY else None
+    return action, outcome
 
 
 def main(args: list[str] | None = None) -> int:

@@ -36,13 +36,15 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from sgim_nodes.core.learner_registry import SGIM_ACTS, kinds
+
 ENVIRONMENT_FIELDS = ("code", "world", "data", "numpy", "scipy", "pybullet", "python")
 FIELDS = (*ENVIRONMENT_FIELDS, "learner_code", "parameters")
-LEARNER_MODULES = {"sgim-acts": ("acts_learner", "acts_runner", "experts", "strategies",
-                                 "strategy_choice", "strategy_regions", "teacher_turns")}
-"""Core modules only one learner imports (tests/provenance/test_fingerprint.py checks that a
-run of any other learner does not, unless its teachers take turns): they count in the
-``learner_code`` of those runs only (module_groups)."""
+LEARNER_MODULES = {k.name: k.own_modules for k in kinds() if k.own_modules}
+"""Core modules only one learner imports, as its declaration says
+(tests/provenance/test_fingerprint.py checks that a run of any other learner does not,
+unless its teachers take turns): they count in the ``learner_code`` of those runs only
+(module_groups)."""
 LIBRARIES = ("numpy", "scipy", "pybullet")
 WORLD_MODULES = ("bezier", "core_world", "data_files", "fishing_world", "lake", "rod_urdf",
                  "scaling")
@@ -61,7 +63,7 @@ OPERATIONAL = frozenset({"startup_timeout", "settle_time", "map_timeout", "execu
 learner does: a slow machine may need a longer startup_timeout for the very same runs."""
 SILENT_NODES = frozenset({"recorder", "markers"})
 """Nodes that only record or draw: their parameters cannot change a movement."""
-OWN_PARAMETERS = {"teachers": lambda value, learner: learner == "sgim-acts",
+OWN_PARAMETERS = {"teachers": lambda value, learner: learner == SGIM_ACTS,
                   "teacher_turns": lambda value, learner: bool(value)}
 """Parameters that nodes of every learner declare but only some runs read: SGIM-ACTS's
 teachers, and teachers taking turns when there are some. A run that does not read one leaves
@@ -124,7 +126,7 @@ def shared_core_files() -> list[Path]:
 def module_groups(parameters: Mapping[str, Any]) -> tuple[str, ...]:
     """The groups of LEARNER_MODULES a run with these parameters goes through."""
     turns = _found(parameters, "teacher_turns")
-    return ("sgim-acts",) if learner_of(parameters) == "sgim-acts" or turns else ()
+    return (SGIM_ACTS,) if learner_of(parameters) == SGIM_ACTS or turns else ()
 
 
 def _found(parameters: Mapping[str, Any], name: str) -> Any:

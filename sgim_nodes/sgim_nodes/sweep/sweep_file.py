@@ -36,12 +36,11 @@ from typing import Any
 
 import yaml
 
-from sgim_nodes.core.learners import CORE_LEARNER_NAMES as LEARNER_NAMES
+from sgim_nodes.core.learner_registry import learner_kind, learner_names
 from sgim_nodes.graph import experiment_options
 from sgim_nodes.graph.description import (
     ARBITER_TEACHER,
     OPTION_PARAMETERS,
-    SOCIAL,
     STORAGES,
     RunOptions,
     acts_teachers,
@@ -96,7 +95,7 @@ class RunSpec:
 
     @property
     def social(self) -> bool:
-        return self.learner in SOCIAL
+        return learner_kind(self.learner).social
 
     def argv(self) -> list[str]:
         """run_experiment's arguments (without --runs-dir, --name and the launcher's own)."""
@@ -280,9 +279,9 @@ def _expand_block(block: dict[str, Any], where: str) -> Iterable[RunSpec]:
         raise SweepFileError(f"{where}: no learner (give 'learner' at the top or in the block)")
     learners = _as_list(block["learner"])
     for learner in learners:
-        if learner not in LEARNER_NAMES:
+        if learner not in learner_names():
             raise SweepFileError(f"{where}: unknown learner {learner!r}; choose among "
-                                 f"{', '.join(LEARNER_NAMES)}")
+                                 f"{', '.join(learner_names())}")
     seeds = _seeds(block.get("seeds", 1), where)
     axes = {key: _as_list(block.get(key, DEFAULTS[key])) for key in DEFAULTS}
     for value in axes["period"]:
@@ -317,7 +316,7 @@ def _expand_block(block: dict[str, Any], where: str) -> Iterable[RunSpec]:
             itertools.product(seeds, learners, axes["movements"], axes["eval_every"],
                               axes["storage"], axes["period"], axes["teacher"],
                               itertools.product(*values))):
-        social = learner in SOCIAL
+        social = learner_kind(learner).social
         problems = social_mode_problems(RunOptions(learner, teacher=teacher),
                                         checked_params(zip(names, chosen, strict=True)))
         if problems:

@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from sgim_nodes.core.environment import PROCESS_CODES
+from sgim_nodes.core.learner_registry import display_name
 from sgim_nodes.view.picture import (
     INTEREST_STOPS,
     PROCESS_COLOURS,
@@ -78,10 +79,6 @@ MARK_COLOURS = {"unreached": (230, 40, 40), "reached": (0, 150, 136), "goal": (0
 # The lake under it all (the node's lake.png): strong enough to stay apart under the shading.
 WATER_RGB = (150, 195, 235)
 LAND_RGB = (232, 214, 168)
-# The learner's name (RunStatus.learner) as people write it, for the page's title.
-LEARNER_TITLES = {"sgim-d": "SGIM-D", "sgim-acts": "SGIM-ACTS", "saggriac": "SAGG-RIAC",
-                  "random-goals": "random goals", "demo-only": "demonstrations only",
-                  "random": "random actions"}
 Answer = dict[str, Any]
 
 
@@ -90,8 +87,9 @@ MESSAGE_LIMIT = 300
 
 
 def learner_title(name: str) -> str:
-    """How the page names the learner: SGIM-ACTS for sgim-acts; '' while no run said it."""
-    return LEARNER_TITLES.get(name, name)
+    """How the page names the learner (RunStatus.learner), as its declaration says; '' while
+    no run said it."""
+    return display_name(name) if name else name
 
 
 def outcome_space() -> dict[str, Any]:

@@ -32,6 +32,7 @@ from sgim_nodes.analysis.statistics import (
 )
 from sgim_nodes.analysis.study import Study
 from sgim_nodes.core.experts import FISHING_EXPERTS
+from sgim_nodes.core.learner_registry import SGIM_ACTS, SGIM_D, display_name
 from sgim_nodes.experiments.pinned import Experiment
 from sgim_nodes.experiments.reports import Report, acts_choices
 from sgim_nodes.experiments.reports.acts_choices import Verdict
@@ -39,12 +40,10 @@ from sgim_nodes.experiments.reports.graph_study import load, run_time_note
 from sgim_nodes.experiments.reports.study import own_runs
 from sgim_nodes.sweep.sweep_file import RunSpec
 
-ACTS = "sgim-acts"
+ACTS = SGIM_ACTS
 DEMONSTRATION_RATIO_GOAL = 0.5
 """Issue 33: SGIM-ACTS no worse than SGIM-D with at most this share of its demonstrations."""
 FIGURE = "active_strategies_error_curves.png"
-NAMES = {"sgim-acts": "SGIM-ACTS", "sgim-d": "SGIM-D, one teacher who knows everything",
-         "saggriac": "SAGG-RIAC", "demo-only": "demonstrations only"}
 
 
 def group_of(learner: str, params: tuple[tuple[str, str], ...]) -> str:
@@ -58,8 +57,10 @@ def label(group: str) -> str:
     """A group as the page names it."""
     _, _, rest = group.partition(" [teacher_turns=")
     if rest:
-        return f"SGIM-D, {rest.rstrip(']').replace(',', ', ')} taking turns"
-    return NAMES.get(group, group)
+        return f"{display_name(SGIM_D)}, {rest.rstrip(']').replace(',', ', ')} taking turns"
+    if group == SGIM_D:
+        return f"{display_name(group)}, one teacher who knows everything"
+    return display_name(group)
 
 
 def regroup(study: Study, experiment: Experiment) -> dict[str, RunSpec]:
@@ -124,7 +125,7 @@ def make(experiment: Experiment, runs_dir: Path, figures_dir: Path) -> Report:
     report.add(page, "comparison", comparison(numbers, groups, tests, pond, demos))
     report.add(page, "error-tests", pairwise_markdown(list(tests.values())))
     report.add(page, "pond-tests", isolated_tests_table(list(pond.values())))
-    arms = [g for g in groups if g.partition(" [")[0] == "sgim-d"]
+    arms = [g for g in groups if g.partition(" [")[0] == SGIM_D]
     against = {g: demonstration_verdict(numbers, demos, tests[g]) for g in arms}
     taught = {g: by_teacher(study, g, spec) for g, spec in specs.items()}
     report.add(page, "demonstrations", demonstrations(study, groups, demos, taught, against))

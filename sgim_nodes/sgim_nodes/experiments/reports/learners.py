@@ -6,15 +6,14 @@ from pathlib import Path
 
 import numpy as np
 
+from sgim_nodes.core.learner_registry import RANDOM, RANDOM_GOALS, SAGGRIAC, SGIM_D
+from sgim_nodes.core.learner_registry import colour as learner_colour
 from sgim_nodes.experiments import runner_jobs
 from sgim_nodes.experiments.pinned import Experiment
 from sgim_nodes.experiments.reports import Report
 
-COLOURS = {"random": "tab:gray", "random-goals": "tab:purple", "saggriac": "tab:blue",
-           "sgim-d": "tab:red"}
-"""The analysis' colours (analysis/figures.py), so every figure of a learner looks alike."""
-COMPARISONS = (("random-goals", "random"), ("saggriac", "random"),
-               ("saggriac", "random-goals"), ("sgim-d", "saggriac"))
+COMPARISONS = ((RANDOM_GOALS, RANDOM), (SAGGRIAC, RANDOM), (SAGGRIAC, RANDOM_GOALS),
+               (SGIM_D, SAGGRIAC))
 """The tests issue 10 asked for: goal babbling against motor babbling, the interest against
 uniform goals, the teacher against none."""
 FIGURE = "learners_error_curves.png"
@@ -49,7 +48,7 @@ def figure(results: list[dict], floors: dict[str, float], eval_every: int, path:
             m = curves.mean(0)
             h = (stats.t.ppf(0.975, len(curves) - 1) * curves.std(0, ddof=1)
                  / np.sqrt(len(curves))) if len(curves) > 1 else 0 * m
-            colour = COLOURS.get(lr, "tab:gray")
+            colour = learner_colour(lr) or "tab:gray"  # as in every figure of the learner
             ax.plot(x, m, label=lr, color=colour)
             ax.fill_between(x, m - h, m + h, alpha=0.2, color=colour)
         if np.isfinite(floors.get(name, np.nan)):

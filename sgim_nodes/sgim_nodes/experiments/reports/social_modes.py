@@ -17,12 +17,13 @@ from sgim_nodes.analysis.report import (
     table,
 )
 from sgim_nodes.analysis.statistics import compare_groups, coverage_tests, demonstration_times
+from sgim_nodes.core.learner_registry import SGIM_D, display_name, learner_names
 from sgim_nodes.experiments.pinned import Experiment
 from sgim_nodes.experiments.reports import Report
 from sgim_nodes.experiments.reports.graph_study import load, run_time_note
 from sgim_nodes.experiments.reports.study import own_runs
 
-PAPER = "sgim-d"
+PAPER = SGIM_D
 """The group of the paper's SGIM-D (means and goal, random-unreached, periodic, P = 150): the
 setting every block of the sweep varies one choice around."""
 FIGURE = "social_modes_error_curves.png"
@@ -30,10 +31,10 @@ FIGURE = "social_modes_error_curves.png"
 
 def label(group: str) -> str:
     """A group as the page names it: 'sgim-d [demonstration_period=500]' -> 'P = 500'."""
-    names = {"sgim-d": "SGIM-D, the paper's", "saggriac": "SAGG-RIAC",
-             "demo-only": "demonstrations only"}
-    if group in names:
-        return names[group]
+    if group == PAPER:
+        return f"{display_name(group)}, the paper's"
+    if group in learner_names():
+        return display_name(group)
     inside = group[group.find("[") + 1:group.rfind("]")]
     parts = []
     for item in inside.split(", "):

@@ -23,6 +23,7 @@ from sgim_nodes.analysis.report import (
 )
 from sgim_nodes.analysis.statistics import ALPHA, PairTest, demonstration_times
 from sgim_nodes.analysis.study import Study
+from sgim_nodes.core.learner_registry import DEMO_ONLY, RANDOM, SAGGRIAC, SGIM_D, display_name
 from sgim_nodes.experiments.pinned import Experiment
 from sgim_nodes.experiments.reports import Report
 from sgim_nodes.experiments.reports.graph_study import load, run_time_note, wall_span
@@ -31,8 +32,6 @@ NEAR = 0.1
 """A benchmark goal is near a demonstration within this distance (outcome units) of a
 demonstrated outcome: about 1.4 noise units, chosen before the first study was looked at."""
 FRAMES = (1000, 2500, 5000)  # the paper's landing frames
-NAMES = {"sgim-d": "SGIM-D", "saggriac": "SAGG-RIAC", "random-goals": "random goals",
-         "demo-only": "demonstrations only", "random": "random actions"}
 
 
 def make(experiment: Experiment, runs_dir: Path, figures_dir: Path) -> Report:
@@ -103,15 +102,15 @@ def goal_groups(study: Study) -> tuple[dict[str, dict[str, list[float]]], str]:
     for learner in study.learners:
         cells = [num(float(np.mean(groups[g][learner]))) if groups[g].get(learner) else "n/a"
                  for g in subsets]
-        rows.append([NAMES.get(learner, learner), *cells])
+        rows.append([display_name(learner), *cells])
     sizes = {g: int(m.sum()) for g, m in subsets.items()}
     head = table(["learner", f"{sizes['near']} goals within {NEAR} of a demonstration",
                   f"{sizes['far']} goals farther", f"{sizes['pond']} goals in the isolated "
                   "region", f"all {sizes['all']}"], rows)
     labelled = {f"{learner} ({g})": values for g in ("near", "far", "pond")
                 for learner, values in groups[g].items()}
-    pairs = [(f"sgim-d ({g})", f"{other} ({g})") for g in ("near", "far", "pond")
-             for other in study.learners if other != "sgim-d" and "sgim-d" in groups[g]]
+    pairs = [(f"{SGIM_D} ({g})", f"{other} ({g})") for g in ("near", "far", "pond")
+             for other in study.learners if other != SGIM_D and SGIM_D in groups[g]]
     text = "\n".join(head) + (
         f"\n\nMean over runs of each run's mean final distance on the goals of the group "
         f"(goals split by their distance to the nearest demonstrated outcome of the teaching "
@@ -135,13 +134,14 @@ def _verdict(numbers: StudyNumbers, a: str, b: str) -> str:
     """'a ends closer than b' checked: the means, the corrected p-values and the verdict."""
     t = _test(numbers, a, b)
     if t is None:
-        return f"{NAMES[a]} or {NAMES[b]} is missing"
+        return f"{display_name(a)} or {display_name(b)} is missing"
     ma, mb = _mean(numbers, a), _mean(numbers, b)
     holds = t.significant and t.closer == a
     word = ("reproduced" if holds else "not reproduced: the reverse" if t.significant
             else "not reproduced: no significant difference")
-    return (f"{NAMES[a]} {num(ma)} against {NAMES[b]} {num(mb)} (Holm-corrected p: Welch "
-            f"{pval(t.welch_p_holm)}, Mann-Whitney {pval(t.mann_whitney_p_holm)}): **{word}**")
+    return (f"{display_name(a)} {num(ma)} against {display_name(b)} {num(mb)} "
+            f"(Holm-corrected p: Welch {pval(t.welch_p_holm)}, "
+            f"Mann-Whitney {pval(t.mann_whitney_p_holm)}): **{word}**")
 
 
 def findings(numbers: StudyNumbers, groups: dict[str, dict[str, list[float]]]) -> str:
@@ -150,29 +150,29 @@ def findings(numbers: StudyNumbers, groups: dict[str, dict[str, list[float]]]) -
     from sgim_nodes.analysis.statistics import compare
 
     lines = ["1. *SGIM-D ends closer to the benchmark goals than SAGG-RIAC and random actions.* "
-             + _verdict(numbers, "sgim-d", "saggriac") + "; "
-             + _verdict(numbers, "sgim-d", "random") + ".",
+             + _verdict(numbers, SGIM_D, SAGGRIAC) + "; "
+             + _verdict(numbers, SGIM_D, RANDOM) + ".",
              "2. *SGIM-D ends closer than demonstrations only.* Over all goals: "
-             + _verdict(numbers, "sgim-d", "demo-only") + "."]
+             + _verdict(numbers, SGIM_D, DEMO_ONLY) + "."]
     far = groups["far"]
-    if "sgim-d" in far and "demo-only" in far:
-        t = compare("sgim-d", far["sgim-d"], "demo-only", far["demo-only"])
-        side = "SGIM-D" if t.closer == "sgim-d" else "demonstrations only"
+    if SGIM_D in far and DEMO_ONLY in far:
+        t = compare(SGIM_D, far[SGIM_D], DEMO_ONLY, far[DEMO_ONLY])
+        side = "SGIM-D" if t.closer == SGIM_D else "demonstrations only"
         lines[-1] += (f" On the goals far from every demonstration: SGIM-D "
-                      f"{num(float(np.mean(far['sgim-d'])))} against "
-                      f"{num(float(np.mean(far['demo-only'])))}, {side} closer (p: Welch "
+                      f"{num(float(np.mean(far[SGIM_D])))} against "
+                      f"{num(float(np.mean(far[DEMO_ONLY])))}, {side} closer (p: Welch "
                       f"{pval(t.welch_p)}, Mann-Whitney {pval(t.mann_whitney_p)}; the goal "
                       "groups' table corrects it with the others).")
     cov = numbers.coverage
-    if "sgim-d" in cov:
+    if SGIM_D in cov:
         reached = {k: f"{own_runs(c)}/{len(c.runs)}" for k, c in cov.items()}
-        others = [t for t in numbers.region_tests if "sgim-d" in (t.a, t.b)]
-        beaten = [t.b if t.a == "sgim-d" else t.a for t in others if t.significant]
+        others = [t for t in numbers.region_tests if SGIM_D in (t.a, t.b)]
+        beaten = [t.b if t.a == SGIM_D else t.a for t in others if t.significant]
         lines.append(
             "3. *SGIM-D alone explores the isolated region.* Runs whose own movements land "
-            "there: " + ", ".join(f"{NAMES.get(k, k)} {v}" for k, v in reached.items())
+            "there: " + ", ".join(f"{display_name(k)} {v}" for k, v in reached.items())
             + ". SGIM-D's own coverage differs significantly (corrected) from: "
-            + (", ".join(NAMES.get(b, b) for b in beaten) or "none") + ".")
+            + (", ".join(display_name(b) for b in beaten) or "none") + ".")
     lines.append(f"\nSignificance: both corrected p-values below {ALPHA} (the pairwise table); "
                  "the verdicts are the tool's, from the tables above.")
     return "\n".join(lines)
@@ -188,7 +188,7 @@ def cost(study: Study) -> str:
     for learner in study.learners:
         d = [r.duration_s for r in study.runs_of(learner) if r.duration_s]
         if d:
-            rows.append([NAMES.get(learner, learner), str(len(d)),
+            rows.append([display_name(learner), str(len(d)),
                          f"{np.mean(d):.0f}", f"{min(d):.0f}-{max(d):.0f}"])
     total = sum(r.duration_s or 0.0 for r in study.runs)
     span = wall_span(study)
@@ -208,7 +208,7 @@ def summary(numbers: StudyNumbers) -> str:
         shown = "0" if not demos else (f"{min(demos)}-{max(demos)}" if min(demos) != max(demos)
                                        else str(demos[0]))
         cov = numbers.coverage.get(learner)
-        rows.append([NAMES.get(learner, learner), f"{num(i.mean)} [{num(i.low)}, {num(i.high)}]",
+        rows.append([display_name(learner), f"{num(i.mean)} [{num(i.low)}, {num(i.high)}]",
                      shown, f"{own_runs(cov)}/{len(cov.runs)}" if cov else "n/a"])
     floor = numbers.floor
     out = table(["learner", "final error [95 % interval]", "demonstrations per run",
