@@ -105,7 +105,6 @@ class GoalBabblingLearner(Learner):
         # Called with (goal, competence) when one of its own goal attempts ends (not an
         # imitation): what a learner that asks for help watches (help_request.py).
         self.attempt_listeners: list[Callable[[np.ndarray, float], None]] = []
-        self.last_attempt_goal: np.ndarray | None = None
 
     def on_demonstration(self, action: np.ndarray | None, outcome: np.ndarray | None) -> None:
         """Store what was shown and queue its follow-up (teaching.py's contents): with both, the
@@ -185,7 +184,6 @@ class GoalBabblingLearner(Learner):
         self.tree.add(process.goal, comp)
         self.n_goals += 1
         if isinstance(process, GoalAttempt):
-            self.last_attempt_goal = process.goal.copy()
             for listener in self.attempt_listeners:
                 listener(process.goal, comp)
         return comp

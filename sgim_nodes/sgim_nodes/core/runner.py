@@ -27,18 +27,12 @@ import numpy as np
 from .config import LearnerConfig
 from .environment import is_success
 from .evaluator import Evaluator
-from .help_request import (
-    DEFAULT_TIMING,
-    ON_REQUEST,
-    TIMINGS,
-    HelpRequests,
-    budget_for,
-    check_timing,
-)
+from .help_request import DEFAULT_TIMING, ON_REQUEST, TIMINGS, budget_for, check_timing
 from .learner_base import Learner
 from .learner_registry import SGIM_D, learner_kind, learner_names, make_learner
 from .random_streams import SEED_MAX, component_rng
 from .repeatable_casts import RepeatableCasts
+from .schedule import Schedule
 from .teaching import (
     ABILITY,
     DEFAULT_DEMONSTRATION_CONTENT,
@@ -123,12 +117,11 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
             # One for the whole run: an answer unchanged since the last turn is not cast again.
             teacher_env = RepeatableCasts(world.make_teacher_env())
     try:
-        requests = None
-        if teacher is not None and timing == ON_REQUEST:
-            requests = HelpRequests(budget_for(movements, teacher_period), teacher_period)
-            learner.attempt_listeners.append(lambda _goal, c: requests.attempt_ended(c))
+        schedule = Schedule(movements, teacher_period, timing, teacher is not None)
+        if schedule.help is not None:
+            learner.attempt_listeners.append(schedule.attempt_ended)
         return _run(learner, world, movements, eval_every, write, teacher, teacher_rule,
-                    teacher_env, progress, demonstration_content, requests)
+                    teacher_env, progress, demonstration_content, schedule)
     finally:
         if teacher_env is not None and hasattr(teacher_env, "close"):
             teacher_env.close()
@@ -138,7 +131,7 @@ def _run(learner: Learner, world: World, movements: int, eval_every: int,
          write: Callable[[dict[str, Any]], None], teacher: Teacher | None, teacher_rule: str,
          teacher_env: RepeatableCasts | None, progress: Callable[[int], None] | None,
          content: str = DEFAULT_DEMONSTRATION_CONTENT,
-         requests: HelpRequests | None = None) -> list[float]:
+         schedule: Schedule | None = None) -> list[float]:
     evaluator = Evaluator(world.eval_env, world.goals, world.scale.diagonal)
     means: list[float] = []
 
@@ -147,21 +140,21 @@ def _run(learner: Learner, world: World, movements: int, eval_every: int,
         means.append(res.mean_distance)
         write({"type": EVALUATION, "movements": count, **res.to_dict()})
 
+    schedule = schedule or Schedule(movements, 1, DEFAULT_TIMING, teacher=False)
     for i in range(movements):
         if eval_every > 0 and i % eval_every == 0:
             evaluate(i)
         turn, asked, ask = None, None, 0
-        if teacher is not None and requests is None and teacher.due(i):
+        if schedule.turn_due(i):
+            schedule.take_turn(i)
             learner.on_teacher_turn()
             turn = teacher.decide(learner_progress(teacher_rule, learner.inverse,
                                                    learner.own_outcomes, teacher_env))
-        elif requests is not None and requests.should_ask(i):
-            asked = learner.last_attempt_goal
-            requests.asked()
-            ask = requests.asks
+        elif schedule.ask_due(i):
+            question = schedule.ask(i)
+            asked, ask = question.goal, question.index
             # The ask ends the goal attempt under way, answered or not, as a teacher's turn
-            # does: the graph's arbiter must stop the running job to ask before it knows
-            # whether the teacher will show anything (nodes/help_asks.py).
+            # does (core/schedule.py).
             learner.on_teacher_turn()
             write({"type": "help_request", "movement": i, "ask": ask, "goal": _vec(asked)})
             turn = teacher.decide(learner_progress(teacher_rule, learner.inverse,

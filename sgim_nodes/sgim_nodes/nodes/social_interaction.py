@@ -68,6 +68,7 @@ from sgim_nodes.core.competence import competence
 from sgim_nodes.core.environment import PROCESS_CODES, MovementResult
 from sgim_nodes.core.help_request import ON_REQUEST
 from sgim_nodes.core.learner_registry import IN_ARBITER, learner_kind, make_learner
+from sgim_nodes.core.schedule import Schedule
 from sgim_nodes.core.teaching import GOAL_ONLY, MEANS_ONLY
 from sgim_nodes.nodes.acts_episodes import ActsEpisodes
 from sgim_nodes.nodes.arbiter_jobs import JobSlot, Waits
@@ -114,8 +115,10 @@ class SocialInteraction(AsyncNode):
                                  "automatic): it answers the learner's help requests")
         if on_request and self.kind.refusal(timing=ON_REQUEST):
             raise ParameterError(self.kind.refusal(timing=ON_REQUEST))
-        self.sync_period = values["demonstration_period"] if (
-            self.automatic and not on_request) else 0
+        # When the teacher takes its turn and the learner asks: the core's schedule, as the
+        # runner's (core/schedule.py); the arbiter caps its jobs where it says.
+        self.schedule = Schedule(self.total, values["demonstration_period"], values["timing"],
+                                 teacher=self.automatic)
         self.social = social
         self.distances = self.config.distances(world_scale(values))
         # The core learner itself, when the arbiter hosts it (module docstring).
@@ -129,15 +132,13 @@ class SocialInteraction(AsyncNode):
         # which tells the help rule (help_asks.py) before it decides the next cap.
         self.goals_per_job = 1 if on_request else values["goals_per_job"]
         self.evaluated: set[int] = set()
-        self.turns_taken: set[int] = set()  # teacher boundaries already handled
         self.finished, self.exit_code = False, 0
         self.job = JobSlot(self)  # the running action, to cut on a demonstration
         self.waits = Waits(self)
         self.progress = RunProgress(self, self.learner, values["seed"], self.total,
                                     lambda: self.count)
 
-        self.asks = (HelpAsks(self, self.total, values["demonstration_period"])
-                     if on_request else None)
+        self.asks = HelpAsks(self, self.schedule) if on_request else None
         self.pace = None  # pause, step and teacher turns: for a human teacher only
         if social and values["teacher"] == "human":
             self.pace = PaceControl(self, self.total, values["demonstration_period"],
@@ -167,7 +168,7 @@ class SocialInteraction(AsyncNode):
         self.goals_folded = point.state.n_competences
         if self.episodes is not None:
             self.episodes.resume(point.records)
-        self.turns_taken = set(point.demonstration_turns)
+        self.schedule.turns_taken = set(point.demonstration_turns)
         self.evaluated = set(point.evaluated)
         if self.asks is not None:
             self.asks.resume(point.records, point.count)
@@ -244,14 +245,14 @@ class SocialInteraction(AsyncNode):
         while self.count < self.total:
             if self.pace is not None:
                 await self.pace.hold(self.count)
-                if self.pace.turn_due(self.count) and self.count not in self.turns_taken:
-                    self.turns_taken.add(self.count)
+                if (self.pace.turn_due(self.count)
+                        and self.count not in self.schedule.turns_taken):
+                    self.schedule.take_turn(self.count)
                     how = await self.pace.teacher_turn(self.count, lambda: bool(self.inbox.pending))
                     self.get_logger().info(f"teacher's turn at movement {self.count}: {how}")
                     continue
-            boundary = self.sync_period and self.count % self.sync_period == 0
-            if boundary and self.count not in self.turns_taken:
-                self.turns_taken.add(self.count)
+            if self.schedule.turn_due(self.count):
+                self.schedule.take_turn(self.count)
                 await self.waits.until(lambda b=self.count: b in self.inbox.boundary_word,
                                        self.p["teacher_timeout"],
                                        f"the teacher's word at movement {self.count}")
@@ -259,7 +260,7 @@ class SocialInteraction(AsyncNode):
                 if shown(word):
                     await self._take_demonstration(word)
                 continue
-            if self.asks is not None and self.asks.should_ask(self.count):
+            if self.asks is not None and self.schedule.ask_due(self.count):
                 await self._ask_for_help()
                 continue
             if self.inbox.pending:
@@ -279,13 +280,9 @@ class SocialInteraction(AsyncNode):
     def cap(self) -> int:
         """Movements the next job may make: to the budget, the teacher's next boundary, a
         human's step, or where a stalled learner earns its next ask."""
-        cap = self.total - self.count
-        if self.sync_period:
-            cap = min(cap, self.sync_period - self.count % self.sync_period)
+        cap = self.schedule.cap(self.count)
         if self.pace is not None:
             cap = min(cap, self.pace.cap(cap))
-        if self.asks is not None:
-            cap = self.asks.cap(self.count, cap)
         return cap
 
     async def _ask_for_help(self) -> None:
@@ -361,9 +358,9 @@ class SocialInteraction(AsyncNode):
             max_movements=cap, max_goals=self.goals_per_job, movements_before=self.count,
             goals_before=self.goals_folded, demonstrated=list(demonstrated)), "reach_goal")
         self.goals_folded += result.goals_attempted
-        if self.asks is not None:  # one goal per job: its attempt is the job's last
-            self.asks.attempt_ended(vec(result.goal), result.goal_movements,
-                                    result.competence, result.finished, self.count)
+        if self.asks is not None and result.goal_movements > 0:  # one goal per job: the last
+            self.schedule.attempt_ended(vec(result.goal), result.competence,
+                                        None if result.finished else self.count)
         return result
 
     def publish_competence(self, msg: Competence) -> None:
