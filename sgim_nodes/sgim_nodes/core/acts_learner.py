@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import portable
-from .competence import competence, start_distance
+from .competence import start_distance
 from .config import LearnerConfig
 from .environment import ResultLike, is_success
 from .experts import ExpertAnswer
@@ -258,10 +258,7 @@ class SgimActsLearner(Learner):
 
     def _end(self, episode: Episode) -> None:
         """The episode's competence at its chosen goal goes to its (strategy, region) pair."""
-        d = self.config.distances(self.scale)
-        reference = (episode.start_distance if self.config.competence_reference == "memory"
-                     else d.competence_radius)
-        comp = competence(episode.choice.goal, episode.nearest.outcome, reference,
-                          d.success_tolerance, d.competence_floor)
+        comp = self.config.distances(self.scale).competence(
+            episode.choice.goal, episode.nearest.outcome, episode.start_distance)
         episode.log.competence = comp
         self.regions.add(episode.choice.strategy.name, episode.choice.goal, comp)

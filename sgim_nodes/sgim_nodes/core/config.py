@@ -19,6 +19,9 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
+import numpy as np
+
+from .competence import competence
 from .region_tree import SPLIT_QUALITIES
 from .scale import WorldScale
 
@@ -39,6 +42,17 @@ class Distances:
     min_region_width: float
     explore_distance: float
     failure_cost: float
+    competence_reference: str = "memory"
+
+    def competence(self, goal: np.ndarray, best_outcome: np.ndarray | None,
+                   start_distance: float) -> float:
+        """An attempt's competence at ``goal`` (competence.py), against the configured
+        reference: memory's distance to the goal before the attempt (``start_distance``), or
+        the fixed radius. One rule for every learner and node that measures one."""
+        reference = (start_distance if self.competence_reference == "memory"
+                     else self.competence_radius)
+        return competence(goal, best_outcome, reference, self.success_tolerance,
+                          self.competence_floor)
 
 
 @dataclass(frozen=True)
@@ -316,6 +330,7 @@ class LearnerConfig:
             min_region_width=self.min_region_width_size * scale.size,
             explore_distance=self.explore_distance_size * scale.size,
             failure_cost=self.failure_cost_size * scale.size,
+            competence_reference=self.competence_reference,
         )
 
     def to_dict(self) -> dict[str, Any]:

@@ -25,7 +25,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .competence import competence, start_distance
+from .competence import start_distance
 from .config import LearnerConfig
 from .environment import ResultLike
 from .goal_reaching import GoalAttempt, probe_scale_for
@@ -176,11 +176,8 @@ class GoalBabblingLearner(Learner):
         None for a means-only imitation, which has no goal."""
         if process.goal is None:
             return None
-        d = self.config.distances(self.scale)
-        reference = (process.start_distance if self.config.competence_reference == "memory"
-                     else d.competence_radius)
-        comp = competence(process.goal, process.best_outcome, reference, d.success_tolerance,
-                          d.competence_floor)
+        comp = self.config.distances(self.scale).competence(
+            process.goal, process.best_outcome, process.start_distance)
         self.tree.add(process.goal, comp)
         self.n_goals += 1
         if isinstance(process, GoalAttempt):

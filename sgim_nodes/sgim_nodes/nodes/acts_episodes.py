@@ -26,7 +26,6 @@ from sgim_msgs.action import Imitate, ReachGoal
 from sgim_msgs.msg import Competence, Demonstration, Goal, HelpRequest
 from sgim_msgs.srv import RegisterDemonstration
 from sgim_nodes.bag.record_checks import expert_source
-from sgim_nodes.core.competence import competence
 from sgim_nodes.core.teaching import GOAL_ONLY, MEANS_AND_GOAL
 from sgim_nodes.nodes.ros_glue import floats, vec
 from sgim_ros import qos
@@ -141,13 +140,7 @@ class ActsEpisodes:
     def _publish(self, goal: Goal, best, used: int, start: float = 0.0) -> None:
         """The episode's competence at its chosen goal (-1 without an outcome)."""
         node = self.arbiter
-        d = node.distances
-        comp = -1.0
-        if best is not None:
-            reference = (start if node.config.competence_reference == "memory"
-                         else d.competence_radius)
-            comp = competence(vec(goal.point), best, reference, d.success_tolerance,
-                              d.competence_floor)
+        comp = node.distances.competence(vec(goal.point), best, start)
         node.publish_competence(Competence(
             stamp=node.get_clock().now().to_msg(), goal_index=goal.index,
             movement_index=node.count, goal=list(goal.point), reached=floats(best),

@@ -43,7 +43,7 @@ from sgim_msgs.action import ReachGoal
 from sgim_msgs.msg import Competence
 from sgim_msgs.srv import ChooseGoal, ExecuteAction, RegisterDemonstration
 from sgim_nodes.bag.resume import resume_point
-from sgim_nodes.core.competence import competence, start_distance
+from sgim_nodes.core.competence import start_distance
 from sgim_nodes.core.environment import MovementResult
 from sgim_nodes.core.goal_reaching import GoalAttempt, probe_scale_for
 from sgim_nodes.core.random_streams import component_rng
@@ -225,13 +225,7 @@ class LowLevelExplorer(AsyncNode):
         result.goal, result.goal_index = floats(goal), chosen.index
         result.goal_movements, result.finished = used, attempt.done
         result.reached = floats(best)
-        result.competence = -1.0
-        if best is not None:
-            reference = (start if self.config.competence_reference == "memory"
-                         else self.distances.competence_radius)
-            result.competence = competence(goal, best, reference,
-                                           self.distances.success_tolerance,
-                                           self.distances.competence_floor)
+        result.competence = self.distances.competence(goal, best, start)
         if used > 0:  # an attempted goal, even an interrupted one, counts for the interest
             handle.publish_feedback(ReachGoal.Feedback(movements_done=result.movements_used))
             result.goals_attempted += 1

@@ -64,7 +64,6 @@ from sgim_msgs.srv import ExecuteAction, RegisterDemonstration
 from sgim_nodes.bag.record_checks import Limits, teaching_set_size
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.bag.validation import LiveGate
-from sgim_nodes.core.competence import competence
 from sgim_nodes.core.environment import PROCESS_CODES, MovementResult
 from sgim_nodes.core.help_request import ON_REQUEST
 from sgim_nodes.core.learner_registry import IN_ARBITER, learner_kind, make_learner
@@ -337,14 +336,8 @@ class SocialInteraction(AsyncNode):
                                                  self.total - self.count))
         if result is not None and result.movements_used > 0:
             goal = vec(demo.outcome)
-            comp = -1.0
-            if len(result.best_outcome):
-                reference = (reply.closest_distance
-                             if self.config.competence_reference == "memory"
-                             else self.distances.competence_radius)
-                comp = competence(goal, vec(result.best_outcome), reference,
-                                  self.distances.success_tolerance,
-                                  self.distances.competence_floor)
+            best = vec(result.best_outcome) if len(result.best_outcome) else None
+            comp = self.distances.competence(goal, best, reply.closest_distance)
             self.publish_competence(Competence(
                 stamp=self.get_clock().now().to_msg(), goal_index=0,
                 movement_index=self.count, goal=floats(goal), reached=result.best_outcome,
