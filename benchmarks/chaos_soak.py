@@ -307,12 +307,14 @@ def reference_movements(seed: int) -> list[dict]:
     single-process runner (the graph makes its very movements)."""
     from sgim_nodes.core.learner_registry import make_learner
     from sgim_nodes.core.runner import build_world, run
+    from sgim_nodes.core.social_config import SocialConfig
 
     world = build_world("fishing", seed)
     learner = make_learner("sgim-d", world.env.action_dim, world.env.outcome_dim, seed,
                            scale=world.scale)
     records: list[dict] = []
-    run(learner, world, MOVEMENTS, EVAL_EVERY, seed, records.append, teacher_period=PERIOD)
+    run(learner, world, MOVEMENTS, EVAL_EVERY, seed, records.append,
+        SocialConfig(demonstration_period=PERIOD))
     return [r for r in records if r["type"] == "movement"]
 
 

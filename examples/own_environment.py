@@ -21,6 +21,7 @@ from sgim_nodes.core.environment import MovementResult
 from sgim_nodes.core.learner_registry import make_learner
 from sgim_nodes.core.runner import World, run
 from sgim_nodes.core.scale import WorldScale, gaussian_noise_2d
+from sgim_nodes.core.social_config import SocialConfig
 
 NOISE = 0.01  # standard deviation of the hand's landing point, per axis
 
@@ -58,7 +59,7 @@ def learn(movements: int, seed: int) -> tuple[list[tuple[int, float]], int]:
                            seed, scale=scale)
     records: list[dict] = []  # every movement, demonstration and evaluation, as plain dicts
     run(learner, world, movements, eval_every=250, seed=seed, write=records.append,
-        teacher_period=150)  # a demonstration every 150 movements, as in the paper
+        social=SocialConfig())  # the paper's teacher: a demonstration every 150 movements
     curve = [(r["movements"], r["mean_distance"]) for r in records if r["type"] == "evaluation"]
     return curve, sum(r["type"] == "demonstration" for r in records)
 

@@ -64,6 +64,7 @@ def runner_records(learner: str, seed: int = SEED, movements: int = MOVEMENTS,
     """The runner's records of the reference run of ``learner`` (or of another budget)."""
     from sgim_nodes.core.learner_registry import make_learner
     from sgim_nodes.core.runner import build_world, run
+    from sgim_nodes.core.social_config import SocialConfig
 
     world = build_world("fishing", seed)
     if learner == "sgim-acts":  # its teachers answer requests (core/acts_runner.py)
@@ -78,8 +79,9 @@ def runner_records(learner: str, seed: int = SEED, movements: int = MOVEMENTS,
     made = make_learner(learner, world.env.action_dim, world.env.outcome_dim, seed,
                         scale=world.scale)
     records: list[dict] = []
-    run(made, world, movements, eval_every, seed, records.append, teacher_period=PERIOD,
-        teacher_tolerance_noise=TOLERANCE.get(learner, 1.0), **teacher)
+    social = SocialConfig(demonstration_period=PERIOD,
+                          tolerance_noise=TOLERANCE.get(learner, 1.0), **teacher)
+    run(made, world, movements, eval_every, seed, records.append, social)
     return records
 
 

@@ -22,13 +22,14 @@ from pathlib import Path
 from typing import Any
 
 from sgim_nodes.core.learner_registry import SGIM_D, learner_names
+from sgim_nodes.core.social_config import SOCIAL_DEFAULTS
 
 ARGUMENTS = (
     ("learner", SGIM_D, ", ".join(learner_names())),
     ("seed", "0", "seed of the run"),
     ("movements", "5000", "movement budget (the paper's: 5000)"),
     ("eval_every", "250", "movements between evaluations"),
-    ("period", "150", "movements between demonstrations"),
+    ("period", str(SOCIAL_DEFAULTS.demonstration_period), "movements between demonstrations"),
     ("teacher", "automatic", "automatic, human, web or external (see run_experiment.sh "
      "--help)"),
     ("wait_for_teacher", "0", "human or web teacher: seconds to wait at each turn (-1: until "

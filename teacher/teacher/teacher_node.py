@@ -49,22 +49,14 @@ from sgim_msgs.msg import Demonstration, HelpRequest, RunStatus, TeacherCheck
 from sgim_nodes.bag.record_checks import Limits
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.bag.validation import LiveGate
-from sgim_nodes.core.help_request import DEFAULT_TIMING, ON_REQUEST, TIMINGS
+from sgim_nodes.core.help_request import ON_REQUEST
 from sgim_nodes.core.learners import inverse_or_centre
 from sgim_nodes.core.random_streams import component_rng, world_seed
 from sgim_nodes.core.repeatable_casts import RepeatableCasts
 from sgim_nodes.core.teaching import (
     ABILITY,
-    DEFAULT_DEMONSTRATION_CONTENT,
-    DEFAULT_REACHED_RULE,
-    DEFAULT_TEACHER_CHOICE,
-    DEFAULT_TOLERANCE_NOISE,
-    DEMONSTRATION_CONTENTS,
     MEANS_ONLY,
     OWN_PROCESSES,
-    PAPER_PERIOD,
-    REACHED_RULES,
-    TEACHER_CHOICES,
     Teacher,
     Turn,
     learner_progress,
@@ -78,11 +70,12 @@ from sgim_nodes.nodes.ros_glue import (
     floats,
     learner_node_params,
     run_node,
+    social_params,
     vec,
     world_scale,
 )
 from sgim_ros import qos
-from sgim_ros.params import Param, ParameterError, at_least, non_negative, one_of
+from sgim_ros.params import Param, ParameterError, non_negative
 from sgim_ros.ready import serve_ready
 from sim_bridge.data_params import TEACHING_SET_FILE
 from sim_bridge.fishing_world import DEFAULT_NOISE, FishingWorld
@@ -90,25 +83,8 @@ from teacher.teaching_set import load_checked
 
 AUTOMATIC = "automatic"  # Demonstration.source of this node's demonstrations
 PARAMS = learner_node_params(
-    Param("demonstration_period", PAPER_PERIOD, "movements between demonstrations",
-          at_least(1)),
-    Param("reached_rule", DEFAULT_REACHED_RULE, "when a teaching goal counts as reached: "
-          "'ability' (the learner's inverse model cast for it lands within the tolerance) or "
-          "'own-movements' (one of its own movements landed there); core/teaching.py",
-          one_of(*REACHED_RULES)),
-    Param("teacher_choice", DEFAULT_TEACHER_CHOICE, "which unreached teaching goal it "
-          "demonstrates: 'random-unreached' (the paper), 'farthest-unreached' or "
-          "'nearest-unreached' (from what the learner can do); core/teaching.py",
-          one_of(*TEACHER_CHOICES)),
-    Param("demonstration_content", DEFAULT_DEMONSTRATION_CONTENT, "what a demonstration "
-          "shows: 'means-and-goal' (the action and its outcome, the paper), 'goal-only' (the "
-          "outcome: emulation) or 'means-only' (the action); core/teaching.py",
-          one_of(*DEMONSTRATION_CONTENTS)),
-    Param("timing", DEFAULT_TIMING, "when it speaks: 'period' (every demonstration_period "
-          "movements, the paper) or 'on-request' (in answer to the learner's help_requests); "
-          "the arbiter's must be the same; core/help_request.py", one_of(*TIMINGS)),
-    Param("tolerance_noise", DEFAULT_TOLERANCE_NOISE, "a teaching goal counts as reached "
-          "within this many units of the world's outcome noise", non_negative),
+    *social_params("demonstration_period", "reached_rule", "teacher_choice",
+                   "demonstration_content", "timing", "tolerance_noise"),
     Param("noise", DEFAULT_NOISE, "motor-command noise of the teacher's own world (the "
           "'ability' rule casts there)", non_negative),
     Param("teaching_set", "", "teaching-set file (.npz); empty: the packaged one",

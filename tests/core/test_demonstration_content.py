@@ -12,6 +12,7 @@ from sgim_nodes.core.imitation import IMITATION
 from sgim_nodes.core.learner_registry import make_learner
 from sgim_nodes.core.learners import DEMONSTRATION
 from sgim_nodes.core.planar_arm import PlanarArm
+from sgim_nodes.core.social_config import SocialConfig
 from sgim_nodes.core.teaching import (
     DEMONSTRATION_CONTENTS,
     GOAL_ONLY,
@@ -146,8 +147,8 @@ def test_the_runner_shows_the_learner_only_the_modes_part(content):
 
     learner.on_demonstration = spy
     records: list[dict] = []
-    runner.run(learner, world, 300, 0, 1, records.append, teacher_period=50,
-               teacher_tolerance_noise=0.01, demonstration_content=content)
+    runner.run(learner, world, 300, 0, 1, records.append,
+        SocialConfig(demonstration_period=50, tolerance_noise=0.01, demonstration_content=content))
     demos = [r for r in records if r["type"] == "demonstration"]
     assert len(demos) == len(given) == 6
     for record, (action, outcome) in zip(demos, given, strict=True):
@@ -168,7 +169,8 @@ def test_demo_only_cannot_take_goal_only_demonstrations():
     world = runner.build_world("planar-arm", 0)
     learner = runner.make_learner("demo-only", 12, 2, 0, None, world.scale)
     with pytest.raises(ValueError, match="demo-only"):
-        runner.run(learner, world, 10, 0, 0, lambda r: None, demonstration_content=GOAL_ONLY)
+        runner.run(learner, world, 10, 0, 0, lambda r: None,
+            SocialConfig(demonstration_content=GOAL_ONLY))
     with pytest.raises(SystemExit):
         runner.parse_args(["--learner", "demo-only", "--demonstration-content", "goal-only",
                            "--output", "x.jsonl"])
@@ -178,8 +180,9 @@ def test_demo_only_under_means_only_varies_the_action_without_its_outcome():
     world = runner.build_world("planar-arm", 2)
     learner = runner.make_learner("demo-only", 12, 2, 2, None, world.scale)
     records: list[dict] = []
-    runner.run(learner, world, 120, 0, 2, records.append, teacher_period=40,
-               teacher_tolerance_noise=0.01, demonstration_content=MEANS_ONLY)
+    social = SocialConfig(demonstration_period=40, tolerance_noise=0.01,
+                          demonstration_content=MEANS_ONLY)
+    runner.run(learner, world, 120, 0, 2, records.append, social)
     assert DEMONSTRATION not in learner.memory.labels
     taught = set(map(tuple, world.teaching_outcomes))
     assert not taught & set(map(tuple, learner.memory.outcomes))

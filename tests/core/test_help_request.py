@@ -14,6 +14,7 @@ from sgim_nodes.core.help_request import (
     budget_for,
     progress_and_error,
 )
+from sgim_nodes.core.social_config import SocialConfig
 from sgim_nodes.core.teaching import Teacher
 
 
@@ -56,9 +57,9 @@ def test_never_more_asks_than_earned_nor_than_the_budget():
 
 def test_bad_settings_refused():
     with pytest.raises(ValueError):
-        HelpRequests(budget=-1)
+        HelpRequests(budget=-1, period=10)
     with pytest.raises(ValueError):
-        HelpRequests(budget=3, window=5)
+        HelpRequests(budget=3, period=10, window=5)
     with pytest.raises(ValueError):
         HelpRequests(budget=3, period=0)
 
@@ -78,8 +79,9 @@ def test_the_runner_teaches_only_when_asked_for_the_goal_asked_about():
     learner = runner.make_learner("sgim-d", 12, 2, 4, None, world.scale)
     records: list[dict] = []
     movements, period = 1500, 150
-    runner.run(learner, world, movements, 0, 4, records.append, teacher_period=period,
-               teacher_tolerance_noise=0.01, timing=ON_REQUEST)  # nothing is ever reached
+    social = SocialConfig(demonstration_period=period, tolerance_noise=0.01,
+                          timing=ON_REQUEST)  # nothing is ever reached
+    runner.run(learner, world, movements, 0, 4, records.append, social)
     asks = [r for r in records if r["type"] == "help_request"]
     demos = [r for r in records if r["type"] == "demonstration"]
     assert 0 < len(asks) <= budget_for(movements, period)
@@ -106,7 +108,8 @@ def test_the_periodic_teacher_is_unchanged_by_the_timing_option():
         world = runner.build_world("planar-arm", 5)
         learner = runner.make_learner("sgim-d", 12, 2, 5, None, world.scale)
         records: list[dict] = []
-        runner.run(learner, world, 300, 0, 5, records.append, teacher_period=50, **timing)
+        runner.run(learner, world, 300, 0, 5, records.append,
+            SocialConfig(demonstration_period=50, **timing))
         return [(r["movement"], r["teaching_index"]) for r in records
                 if r["type"] == "demonstration"]
 
@@ -118,4 +121,4 @@ def test_demo_only_cannot_ask():
     world = runner.build_world("planar-arm", 0)
     learner = runner.make_learner("demo-only", 12, 2, 0, None, world.scale)
     with pytest.raises(ValueError, match="never asks"):
-        runner.run(learner, world, 10, 0, 0, lambda r: None, timing=ON_REQUEST)
+        runner.run(learner, world, 10, 0, 0, lambda r: None, SocialConfig(timing=ON_REQUEST))

@@ -5,6 +5,7 @@ import pytest
 
 from sgim_nodes.core.learner_registry import make_learner
 from sgim_nodes.core.planar_arm import PlanarArm
+from sgim_nodes.core.social_config import SocialConfig
 from sgim_nodes.core.teaching import (
     ABILITY,
     DEFAULT_REACHED_RULE,
@@ -99,8 +100,9 @@ def test_the_runner_keeps_teaching_while_a_goal_is_unreached():
     world = runner.build_world("planar-arm", 0)
     learner = runner.make_learner("sgim-d", 12, 2, 0, None, world.scale)
     records: list[dict] = []
-    runner.run(learner, world, 600, 0, 0, records.append, teacher_period=50,
-               teacher_tolerance_noise=0.01)  # a tolerance too tight to ever reach
+    social = SocialConfig(demonstration_period=50,
+                          tolerance_noise=0.01)  # a tolerance too tight to ever reach
+    runner.run(learner, world, 600, 0, 0, records.append, social)
     demos = [r for r in records if r["type"] == "demonstration"]
     assert [d["movement"] for d in demos] == list(range(0, 600, 50))
     assert json.dumps(demos[0])  # plain JSON
@@ -190,7 +192,7 @@ def test_the_runner_counts_no_teacher_cast_as_a_movement():
     world = runner.build_world("arm-7", 0)
     learner = runner.make_learner("sgim-d", world.env.action_dim, 2, 0, None, world.scale)
     records: list[dict] = []
-    runner.run(learner, world, 300, 0, 0, records.append, teacher_period=50)
+    runner.run(learner, world, 300, 0, 0, records.append, SocialConfig(demonstration_period=50))
     moves = [r for r in records if r["type"] == "movement"]
     demos = [r for r in records if r["type"] == "demonstration"]
     assert len(moves) == learner.n_movements == 300
@@ -203,8 +205,8 @@ def test_unknown_rule_is_refused():
 
     world = runner.build_world("planar-arm", 0)
     learner = runner.make_learner("sgim-d", 12, 2, 0, None, world.scale)
-    with pytest.raises(ValueError, match="reached rule"):
-        runner.run(learner, world, 10, 0, 0, lambda r: None, teacher_rule="lucky")
+    with pytest.raises(ValueError, match="reached_rule"):
+        runner.run(learner, world, 10, 0, 0, lambda r: None, SocialConfig(reached_rule="lucky"))
 
 
 # --- which unreached goal (issue 14: teacher_choice) ------------------------------------------
@@ -252,8 +254,9 @@ def test_the_runner_demonstrates_what_the_choice_rule_picks(choice):
     world = runner.build_world("planar-arm", 3)
     learner = runner.make_learner("sgim-d", 12, 2, 3, None, world.scale)
     records: list[dict] = []
-    runner.run(learner, world, 400, 0, 3, records.append, teacher_period=40,
-               teacher_tolerance_noise=1.0, teacher_rule=OWN_MOVEMENTS, teacher_choice=choice)
+    social = SocialConfig(demonstration_period=40, tolerance_noise=1.0,
+                          reached_rule=OWN_MOVEMENTS, teacher_choice=choice)
+    runner.run(learner, world, 400, 0, 3, records.append, social)
     tolerance = 1.0 * world.scale.noise
     goals = world.teaching_outcomes
     demos = [r for r in records if r["type"] == "demonstration"]
@@ -373,8 +376,9 @@ def test_the_runner_writes_each_turn_s_checks_and_they_redo_its_demonstrations()
     world = runner.build_world("planar-arm", seed)
     learner = runner.make_learner("sgim-d", 12, 2, seed, None, world.scale)
     records: list[dict] = []
-    runner.run(learner, world, movements, 0, seed, records.append, teacher_period=period,
-               teacher_tolerance_noise=20.0)  # lenient: 3 of the 10 turns are silent
+    social = SocialConfig(demonstration_period=period,
+                          tolerance_noise=20.0)  # lenient: 3 of the 10 turns are silent
+    runner.run(learner, world, movements, 0, seed, records.append, social)
     assert all(json.loads(json.dumps(r, allow_nan=False)) == r for r in records)  # plain JSON
     checks = [r for r in records if r["type"] == "teacher_check"]
     shown = {r["movement"]: r["teaching_index"] for r in records

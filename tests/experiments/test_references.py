@@ -98,7 +98,7 @@ def test_pages_go_stale_when_the_runs_change_and_only_then(tmp_path):
     assert fingerprints(again.stderr) == first
 
     # One line of random goals' behaviour: beta's runs change, alpha's do not.
-    edit(core / "learners.py", "UNIFORM_GOALS = (0.0, 1.0, 0.0)",
+    edit(core / "learner_registry.py", "UNIFORM_GOALS = (0.0, 1.0, 0.0)",
          "UNIFORM_GOALS = (0.5, 0.5, 0.0)")
     changed = reproduce(root, "--references")
     assert changed.returncode == 0, changed.stderr

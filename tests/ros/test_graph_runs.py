@@ -158,7 +158,7 @@ def test_the_own_movements_rule_s_checks_through_the_graph(ros_processes, ros_do
     child = run_graph(ros_processes, ros_domain, tmp_path, "sgim-d", "--param",
                       f"tolerance_noise={TOLERANCE['sgim-d']}", "--param",
                       "reached_rule=own-movements", eval_every=0)
-    later = runner_records_later("sgim-d", eval_every=0, teacher_rule="own-movements")
+    later = runner_records_later("sgim-d", eval_every=0, reached_rule="own-movements")
     run = finish(child, tmp_path, "sgim-d")
     records = later.result()
     moves = [r for r in records if r["type"] == "movement"]

@@ -68,7 +68,7 @@ class HelpRequests:
     ``should_ask(movements)`` at a movement boundary, ``asked()`` once the question is put."""
 
     budget: int
-    period: int = 150
+    period: int
     window: int = DEFAULT_WINDOW
     stall_se: float = DEFAULT_STALL_SE
     asks: int = 0

@@ -27,26 +27,21 @@ import numpy as np
 from .config import LearnerConfig
 from .environment import is_success
 from .evaluator import Evaluator
-from .help_request import DEFAULT_TIMING, ON_REQUEST, TIMINGS, budget_for, check_timing
+from .help_request import DEFAULT_TIMING, ON_REQUEST, TIMINGS, budget_for
 from .learner_base import Learner
 from .learner_registry import SGIM_D, learner_kind, learner_names, make_learner
 from .random_streams import SEED_MAX, component_rng
 from .repeatable_casts import RepeatableCasts
 from .schedule import Schedule
+from .social_config import SOCIAL_DEFAULTS, SocialConfig
 from .teaching import (
     ABILITY,
     DEFAULT_DEMONSTRATION_CONTENT,
-    DEFAULT_REACHED_RULE,
-    DEFAULT_TEACHER_CHOICE,
-    DEFAULT_TOLERANCE_NOISE,
     DEMONSTRATION_CONTENTS,
     REACHED_RULES,
     TEACHER_CHOICES,
     Teacher,
     Turn,
-    check_choice,
-    check_content,
-    check_rule,
     learner_progress,
 )
 from .worlds import World, WorldMissing, build_world, world_names
@@ -72,56 +67,47 @@ def check_records(turn: Turn, movement: int, ask: int, rule: str, choice: str
 
 def run(learner: Learner, world: World, movements: int, eval_every: int,
         seed: int, write: Callable[[dict[str, Any]], None],
-        teacher_period: int = 150, teacher_tolerance_noise: float = DEFAULT_TOLERANCE_NOISE,
-        progress: Callable[[int], None] | None = None,
-        teacher_rule: str = DEFAULT_REACHED_RULE,
-        teacher_choice: str = DEFAULT_TEACHER_CHOICE,
-        demonstration_content: str = DEFAULT_DEMONSTRATION_CONTENT,
-        timing: str = DEFAULT_TIMING, teacher_turns: Sequence[Any] = ()) -> list[float]:
+        social: SocialConfig = SOCIAL_DEFAULTS,
+        progress: Callable[[int], None] | None = None) -> list[float]:
     """Drive ``learner`` for ``movements`` movements; returns the evaluation means.
 
-    Evaluations happen at 0, every ``eval_every`` movements and at the end.  Social learners
-    get a demonstration whenever the teacher is due (movements 0, P, 2P, ...) and some
-    teaching goal is unreached under ``teacher_rule``, the one ``teacher_choice`` picks, showing
-    what ``demonstration_content`` says (core/teaching.py). With ``timing`` "on-request" the
-    teacher speaks only when the learner asks (core/help_request.py), at most as many times as
-    the periodic teacher's turns. ``teacher_turns`` (ExpertSpec values): several teachers
-    take the periodic teacher's turns (core/teacher_turns.py).
+    Evaluations happen at 0, every ``eval_every`` movements and at the end. A social learner
+    hears the teacher as ``social`` says (core/social_config.py): at every turn of its period
+    (movements 0, P, 2P, ...) the teacher shows, if some teaching goal is unreached under its
+    reached rule, the one its choice picks, with what the demonstration content says
+    (core/teaching.py); on request, only when the learner asks (core/help_request.py), at most
+    as many times as the periodic teacher's turns; several teachers may take the turns
+    (core/teacher_turns.py, ExpertSpec values).
     """
-    check_rule(teacher_rule)
-    check_choice(teacher_choice)
-    check_content(demonstration_content)
-    check_timing(timing)
-    refusal = learner_kind(learner.name).refusal(timing, demonstration_content)
+    c = social
+    refusal = learner_kind(learner.name).refusal(c.timing, c.demonstration_content)
     if refusal:
         raise ValueError(refusal)
-    if teacher_turns and timing == ON_REQUEST:
-        raise ValueError("teachers taking turns speak at their boundaries: timing on-request "
-                         "has one teacher")
     teacher, teacher_env = None, None
     if learner.social and world.teaching_actions is not None:
-        tolerance = teacher_tolerance_noise * world.scale.noise
-        if teacher_turns:
+        tolerance = c.tolerance_noise * world.scale.noise
+        if c.teacher_turns:
             from .teacher_turns import TeacherTurns
 
-            teacher = TeacherTurns(teacher_turns, world.teaching_actions,
-                                   world.teaching_outcomes, seed, teacher_period, tolerance,
-                                   teacher_choice, world.make_teacher_env, world.part_of)
+            teacher = TeacherTurns(c.teacher_turns, world.teaching_actions,
+                                   world.teaching_outcomes, seed, c.demonstration_period,
+                                   tolerance, c.teacher_choice, world.make_teacher_env,
+                                   world.part_of)
         else:
             teacher = Teacher(world.teaching_actions, world.teaching_outcomes,
-                              component_rng(seed, "teacher"), teacher_period, tolerance,
-                              teacher_choice)
-        if teacher_rule == ABILITY:
+                              component_rng(seed, "teacher"), c.demonstration_period,
+                              tolerance, c.teacher_choice)
+        if c.reached_rule == ABILITY:
             if world.make_teacher_env is None:
                 raise ValueError("the teacher's 'ability' rule needs world.make_teacher_env")
             # One for the whole run: an answer unchanged since the last turn is not cast again.
             teacher_env = RepeatableCasts(world.make_teacher_env())
     try:
-        schedule = Schedule(movements, teacher_period, timing, teacher is not None)
+        schedule = Schedule(movements, c.demonstration_period, c.timing, teacher is not None)
         if schedule.help is not None:
             learner.attempt_listeners.append(schedule.attempt_ended)
-        return _run(learner, world, movements, eval_every, write, teacher, teacher_rule,
-                    teacher_env, progress, demonstration_content, schedule)
+        return _run(learner, world, movements, eval_every, write, teacher, c.reached_rule,
+                    teacher_env, progress, c.demonstration_content, schedule)
     finally:
         if teacher_env is not None and hasattr(teacher_env, "close"):
             teacher_env.close()
@@ -221,23 +207,24 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                         "own, 0.95); benchmark and teaching sets come from SIM_BRIDGE_DATA_DIR")
     p.add_argument("--arm-joints", type=int, default=12,
                    help="planar-arm: number of joints (default: %(default)s)")
-    p.add_argument("--teacher-period", type=int, default=150,
-                   help="movements between demonstrations, paper: 150 (default: %(default)s)")
-    p.add_argument("--teacher-rule", choices=REACHED_RULES, default=DEFAULT_REACHED_RULE,
+    p.add_argument("--teacher-period", type=int, default=SOCIAL_DEFAULTS.demonstration_period,
+                   help="movements between demonstrations, the paper's P (default: %(default)s)")
+    p.add_argument("--teacher-rule", choices=REACHED_RULES, default=SOCIAL_DEFAULTS.reached_rule,
                    help="when a teaching goal counts as reached (core/teaching.py): 'ability', "
                         "the learner's inverse model cast for it lands within the tolerance; "
                         "'own-movements', one of its own movements landed there "
                         "(default: %(default)s)")
-    p.add_argument("--teacher-choice", choices=TEACHER_CHOICES, default=DEFAULT_TEACHER_CHOICE,
+    p.add_argument("--teacher-choice", choices=TEACHER_CHOICES,
+                   default=SOCIAL_DEFAULTS.teacher_choice,
                    help="which unreached teaching goal the teacher demonstrates: at random "
                         "(the paper), the farthest from what the learner can do, or the "
                         "nearest (core/teaching.py; default: %(default)s)")
     p.add_argument("--demonstration-content", choices=DEMONSTRATION_CONTENTS,
-                   default=DEFAULT_DEMONSTRATION_CONTENT,
+                   default=SOCIAL_DEFAULTS.demonstration_content,
                    help="what a demonstration shows the learner: the action and its outcome "
                         "(the paper), the outcome only (emulation) or the action only "
                         "(core/teaching.py; default: %(default)s)")
-    p.add_argument("--timing", choices=TIMINGS, default=DEFAULT_TIMING,
+    p.add_argument("--timing", choices=TIMINGS, default=SOCIAL_DEFAULTS.timing,
                    help="when the teacher speaks: every --teacher-period movements (the "
                         "paper), or when the learner asks, its competence progress stalled "
                         "(core/help_request.py; as many asks at most as periodic turns; "
@@ -247,7 +234,8 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                         "comma-separated names of the world's SGIM-ACTS experts, e.g. "
                         "centre,west,rough on fishing (core/teacher_turns.py; default: one "
                         "teacher who knows the whole teaching set)")
-    p.add_argument("--teacher-tolerance-noise", type=float, default=DEFAULT_TOLERANCE_NOISE,
+    p.add_argument("--teacher-tolerance-noise", type=float,
+                   default=SOCIAL_DEFAULTS.tolerance_noise,
                    help="a teaching goal is reached within this many units of the world's "
                         "outcome noise (default: %(default)s)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -307,6 +295,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         except ValueError as error:
             print(f"error: --teacher-turns: {error}", file=sys.stderr)
             return 2
+    social = SocialConfig(demonstration_period=args.teacher_period, timing=args.timing,
+                          reached_rule=args.teacher_rule, teacher_choice=args.teacher_choice,
+                          demonstration_content=args.demonstration_content,
+                          tolerance_noise=args.teacher_tolerance_noise,
+                          teacher_turns=turns_specs)
     args.output.parent.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
     with args.output.open("w") as f, tqdm(total=args.movements, disable=args.quiet,
@@ -335,10 +328,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                               else {})},
                "config": config.to_dict()})
         means = run(learner, world, args.movements, args.eval_every, args.seed, write,
-                    args.teacher_period, args.teacher_tolerance_noise, progress=bar.update,
-                    teacher_rule=args.teacher_rule, teacher_choice=args.teacher_choice,
-                    demonstration_content=args.demonstration_content, timing=args.timing,
-                    teacher_turns=turns_specs)
+                    social, progress=bar.update)
         demos = counts["demonstration"]  # goal- or means-only ones are not in memory
         turns = ((counts["help_request"] if args.timing == ON_REQUEST else
                   budget_for(args.movements, args.teacher_period))

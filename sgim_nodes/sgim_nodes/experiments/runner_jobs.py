@@ -39,6 +39,7 @@ from sgim_nodes.core.learner_registry import compared_names, make_learner
 from sgim_nodes.core.learners import GoalBabblingLearner
 from sgim_nodes.core.planar_arm import ARMS, reach_of
 from sgim_nodes.core.runner import World, build_world, run
+from sgim_nodes.core.social_config import SocialConfig
 from sgim_nodes.core.teaching import DEFAULT_REACHED_RULE, REACHED_RULES
 from sgim_nodes.experiments.probes import Probe, ReachMap
 from sgim_nodes.provenance import fingerprint as fp
@@ -215,7 +216,7 @@ def run_job(job: RunnerJob) -> dict[str, Any]:
     probe = Probe(learner, forward) if isinstance(learner, GoalBabblingLearner) else None
     start = time.perf_counter()
     curve = run(learner, world, job.movements, job.eval_every, job.seed, lambda record: None,
-                teacher_rule=job.teacher_rule)
+                SocialConfig(reached_rule=job.teacher_rule))
     out = {"job": asdict(job), "name": job.name, "fingerprint": job.fingerprint().to_dict(),
            "curve": [float(v) for v in curve], "final": float(curve[-1]),
            "seconds": time.perf_counter() - start,

@@ -25,6 +25,7 @@ import yaml
 from sgim_nodes.bag.writer import STORAGES  # the recorder's bag formats, named once
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.learner_registry import SGIM_ACTS, learner_kind, learner_names
+from sgim_nodes.core.social_config import SOCIAL_DEFAULTS
 from sgim_ros.params import Param, ParameterError
 
 LEARNER_CONFIG = Path(__file__).resolve().parents[2] / "config" / "learner.yaml"
@@ -102,7 +103,7 @@ class RunOptions:
     seed: int = 0
     movements: int = 5000
     eval_every: int = 250
-    period: int = 150
+    period: int = SOCIAL_DEFAULTS.demonstration_period
     teacher: str = "automatic"
     output: str = ""  # the bag directory
     storage: str = "mcap"

@@ -13,13 +13,15 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from sgim_nodes.core.learner_registry import learner_names
+from sgim_nodes.core.social_config import SOCIAL_DEFAULTS
 from sgim_nodes.graph.description import STORAGES, TEACHERS
 from sgim_nodes.graph.run_folder import run_name_problem
 from sgim_ros.command_line import BriefParser, shown
 from sgim_ros.params import SEED_MAX, seed_problem
 
 REPO = Path(__file__).resolve().parents[3]
-DEFAULTS = {"seed": 0, "movements": 5000, "eval_every": 250, "period": 150,
+DEFAULTS = {"seed": 0, "movements": 5000, "eval_every": 250,
+            "period": SOCIAL_DEFAULTS.demonstration_period,
             "teacher": "automatic", "storage": "mcap", "wait_for_teacher": 0.0,
             "web_port": 8765, "web_host": "127.0.0.1", "web_token": "", "web_linger": 600.0,
             "no_markers": False}
@@ -81,7 +83,8 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--eval-every", type=int,
                    help="movements between evaluations; paper 250 (default: 250)")
     p.add_argument("--period", type=int,
-                   help="movements between demonstrations; paper 150 (default: 150)")
+                   help="movements between demonstrations, the paper's P (default: "
+                        f"{DEFAULTS['period']})")
     p.add_argument("--teacher", choices=TEACHERS,
                    help="automatic (default): the teacher node, every --period movements; "
                         "human: you, at the human_input prompt in this terminal; web: you, on "

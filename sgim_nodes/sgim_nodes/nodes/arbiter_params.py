@@ -5,9 +5,8 @@ reads them through the node module, as for every node (graph/description.py).
 
 from __future__ import annotations
 
-from sgim_nodes.core.help_request import DEFAULT_TIMING, TIMINGS
 from sgim_nodes.nodes.pace import FOREVER
-from sgim_nodes.nodes.ros_glue import TEACHERS, learner_node_params
+from sgim_nodes.nodes.ros_glue import TEACHERS, learner_node_params, social_params
 from sgim_nodes.nodes.sim_client import SIM_CLIENT_PARAMS
 from sgim_ros.params import Param, at_least, non_negative, one_of, positive
 from sim_bridge.data_params import TEACHING_SET_FILE
@@ -23,12 +22,7 @@ PARAMS = learner_node_params(
     Param("movements", 5000, "the run's movement budget (the paper: 5000)", at_least(1)),
     Param("teacher", "automatic", "who gives demonstrations: automatic (synchronous at its "
           "period), human (any time), none", one_of("automatic", "human", "none")),
-    Param("demonstration_period", 150, "the automatic teacher's period P (paper: 150); "
-          "on-request, the learner earns one ask per P movements", at_least(1)),
-    Param("timing", DEFAULT_TIMING, "when the automatic teacher speaks: 'period' (every "
-          "demonstration_period movements, the paper) or 'on-request' (sgim-d asks on "
-          "help_requests when its progress stalls); the teacher's must be the same; "
-          "core/help_request.py", one_of(*TIMINGS)),
+    *social_params("demonstration_period", "timing"),
     Param("wait_for_teacher", 0.0, "human teacher: seconds the run waits for a demonstration "
           f"every demonstration_period movements (0: never waits, {FOREVER:g}: until the "
           "teacher acts)", lambda v: v >= 0 or v == FOREVER, f">= 0 or {FOREVER:g}"),

@@ -27,6 +27,7 @@ from sgim_nodes.core.learner_registry import SGIM_ACTS, SGIM_D, learner_names
 from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
 from sgim_nodes.core.region_tree import SPLIT_QUALITIES
 from sgim_nodes.core.scale import WorldScale, unit_box
+from sgim_nodes.core.social_config import declared
 from sgim_ros.entry import AsyncNode, run_node  # noqa: F401 - the nodes' shared entry point
 from sgim_ros.params import (
     Param,
@@ -191,6 +192,19 @@ TEACHERS = Param("teachers", "centre,west,rough", "sgim-acts: the teachers it ma
                  "comma-separated; each is an expert node in the namespace of its name (ros2 "
                  "run teacher expert --ros-args -r __ns:=/NAME)", _teachers_ok,
                  "distinct names, each a letter then letters, digits or '_'")
+
+
+def social_params(*names: str) -> tuple[Param, ...]:
+    """The ROS parameters of these run-level social settings, as core/social_config.py
+    declares them once: the same name, default, meaning and bounds."""
+    params = []
+    for name in names:
+        d = declared(name)
+        check = (one_of(*d["one_of"]) if "one_of" in d
+                 else at_least(d["at_least"]) if "at_least" in d else None)
+        params.append(Param(name, d["default"], f"{d['help']}; SocialConfig.{name} in "
+                            "core/social_config.py", check))
+    return tuple(params)
 
 
 def learner_node_params(*extra: Param) -> tuple[Param, ...]:
