@@ -56,6 +56,35 @@ class Distances:
 
 
 @dataclass(frozen=True)
+class Range:
+    """A field's own range: numbers from ``low`` (excluded when ``low_open``) to ``high``, or
+    one of ``choices``. Declared once here; LearnerConfig checks it, and the ROS parameters
+    carry it (nodes/ros_glue.py)."""
+
+    low: float | None = None
+    high: float | None = None
+    low_open: bool = False
+    choices: tuple[str, ...] = ()
+
+    def problem(self, value: Any) -> str:
+        """Why ``value`` is out of the range, or '' (NaN is out of every numeric range)."""
+        if self.choices:
+            return "" if value in self.choices else f"must be one of {', '.join(self.choices)}"
+        low_ok = self.low is None or (value > self.low if self.low_open else value >= self.low)
+        if low_ok and (self.high is None or value <= self.high):
+            return ""
+        if self.high is None:
+            return f"must be {'>' if self.low_open else '>='} {self.low:g}"
+        if self.low is None:
+            return f"must be <= {self.high:g}"
+        return f"must be in {'(' if self.low_open else '['}{self.low:g}, {self.high:g}]"
+
+
+AT_LEAST_ONE, PROBABILITY, POSITIVE, NON_NEGATIVE = (
+    Range(1), Range(0.0, 1.0), Range(0.0, low_open=True), Range(0.0))
+
+
+@dataclass(frozen=True)
 class Tie:
     """A rule on fields beyond each one's own range. LearnerConfig refuses a configuration
     that breaks it, naming the first of ``fields`` with ``refusal``; the reference page states
@@ -279,45 +308,13 @@ class LearnerConfig:
         def fail(name: str, why: str) -> None:
             raise ValueError(f"LearnerConfig.{name}: {why} (got {getattr(self, name)!r})")
 
-        for name in ("max_goals_per_region", "zeta", "l_max", "k_max", "goal_budget",
-                     "attempt_patience",
-                     "memory_min_tail", "memory_max_tail", "local_neighbours"):
-            if int(getattr(self, name)) < 1:
-                fail(name, "must be >= 1")
-        if self.min_goals_per_child < 1:
-            fail("min_goals_per_child", "must be >= 1")
-        for name in ("p_mode1", "p_mode2", "p_mode3"):
-            if not 0.0 <= getattr(self, name) <= 1.0:
-                fail(name, "must be a probability in [0, 1]")
-        for tie in TIES:  # each field within its own range first
+        for name, bound in RANGES.items():  # each field within its own range first
+            problem = bound.problem(getattr(self, name))
+            if problem:
+                fail(name, problem)
+        for tie in TIES:
             if not tie.holds(self):
                 fail(tie.fields[0], tie.refusal)
-        for name in ("mode3_radius_noise", "reach_threshold_noise", "nm_initial_step",
-                     "local_radius_action", "local_step_fraction",
-                     "failure_cost_size", "imitation_epsilon", "memory_rebuild_fraction",
-                     "explore_distance_size", "trust_radius_action", "competence_floor_noise",
-                     "acts_cost_autonomous", "acts_cost_emulation", "acts_cost_mimicry"):
-            if not getattr(self, name) > 0.0:
-                fail(name, "must be > 0")
-        for name in ("alpha", "explore_gain", "min_region_width_size", "explore_action",
-                     "success_tolerance_noise", "interest_noise_correction",
-                     "local_min_casts", "local_rank_min_casts", "local_step_support"):
-            if getattr(self, name) < 0.0:
-                fail(name, "must be >= 0")
-        if not 0.0 <= self.explore_cap <= 1.0:
-            fail("explore_cap", "must be in [0, 1]")
-        if self.imitation_count < 0:
-            fail("imitation_count", "must be >= 0")
-        if self.inverse_model not in INVERSE_MODELS:
-            fail("inverse_model", f"must be one of {', '.join(INVERSE_MODELS)}")
-        if self.local_step_check not in STEP_CHECKS:
-            fail("local_step_check", f"must be one of {', '.join(STEP_CHECKS)}")
-        if self.competence_reference not in ("memory", "fixed"):
-            fail("competence_reference", "must be memory or fixed")
-        if self.region_split not in SPLIT_QUALITIES:
-            fail("region_split", f"must be one of {', '.join(SPLIT_QUALITIES)}")
-        if self.optimiser not in OPTIMISERS:
-            fail("optimiser", f"must be one of {', '.join(OPTIMISERS)}")
 
     def distances(self, scale: WorldScale) -> Distances:
         """This configuration's distances in the outcome units of the world ``scale``."""
@@ -340,6 +337,31 @@ class LearnerConfig:
     @classmethod
     def field_names(cls) -> list[str]:
         return [f.name for f in fields(cls)]
+
+
+RANGES: dict[str, Range] = {
+    **dict.fromkeys(("max_goals_per_region", "zeta", "l_max", "k_max", "goal_budget",
+                     "attempt_patience", "memory_min_tail", "memory_max_tail",
+                     "local_neighbours", "min_goals_per_child"), AT_LEAST_ONE),
+    **dict.fromkeys(("p_mode1", "p_mode2", "p_mode3", "explore_cap"), PROBABILITY),
+    **dict.fromkeys(("mode3_radius_noise", "reach_threshold_noise", "nm_initial_step",
+                     "local_radius_action", "local_step_fraction", "failure_cost_size",
+                     "imitation_epsilon", "memory_rebuild_fraction", "explore_distance_size",
+                     "trust_radius_action", "competence_radius_noise",
+                     "competence_floor_noise", "acts_cost_autonomous", "acts_cost_emulation",
+                     "acts_cost_mimicry"), POSITIVE),
+    **dict.fromkeys(("alpha", "explore_gain", "min_region_width_size", "explore_action",
+                     "success_tolerance_noise", "interest_noise_correction",
+                     "imitation_count", "local_min_casts",
+                     "local_rank_min_casts", "local_step_support"), NON_NEGATIVE),
+    "inverse_model": Range(choices=INVERSE_MODELS),
+    "local_step_check": Range(choices=STEP_CHECKS),
+    "optimiser": Range(choices=OPTIMISERS),
+    "competence_reference": Range(choices=("memory", "fixed")),
+    "region_split": Range(choices=SPLIT_QUALITIES),
+}
+"""The range of every LearnerConfig field, declared once (the rules that tie fields together
+are TIES)."""
 
 
 BEFORE_IT_EXISTED: dict[str, Any] = {"local_step_check": "none", "local_rank_min_casts": 0.0,

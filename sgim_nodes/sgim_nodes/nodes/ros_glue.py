@@ -15,25 +15,18 @@ from rclpy.node import Node
 
 from sgim_msgs.msg import Region, RegionMap
 from sgim_nodes.bag.record_checks import vector_problem
-from sgim_nodes.core.config import (
-    INVERSE_MODELS,
-    OPTIMISERS,
-    STEP_CHECKS,
-    TIES,
-    LearnerConfig,
-)
+from sgim_nodes.core.config import RANGES, TIES, LearnerConfig
 from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS  # noqa: F401 - for nodes
 from sgim_nodes.core.learner_registry import SGIM_ACTS, SGIM_D, learner_names
 from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
-from sgim_nodes.core.region_tree import SPLIT_QUALITIES
 from sgim_nodes.core.scale import WorldScale, unit_box
 from sgim_nodes.core.social_config import declared
 from sgim_ros.entry import AsyncNode, run_node  # noqa: F401 - the nodes' shared entry point
 from sgim_ros.params import (
+    Bounds,
     Param,
     ParameterError,
     at_least,
-    between,
     declare,
     one_of,
     positive,
@@ -126,30 +119,9 @@ COMMON_PARAMS = (
     Param("resume_segments", 0, "how many of its recordings to read (0: all)", at_least(0)),
 )
 
-# The range or choices of each LearnerConfig field, for the parameter descriptors;
-# LearnerConfig checks the same and the rules that tie fields together
-# (tests/graph/test_description.py compares them).
-LEARNER_BOUNDS = {
-    **dict.fromkeys(("max_goals_per_region", "zeta", "l_max", "k_max", "goal_budget",
-                     "attempt_patience", "memory_min_tail", "memory_max_tail",
-                     "local_neighbours", "min_goals_per_child"), at_least(1)),
-    **dict.fromkeys(("p_mode1", "p_mode2", "p_mode3", "explore_cap"), between(0.0, 1.0)),
-    **dict.fromkeys(("mode3_radius_noise", "reach_threshold_noise", "nm_initial_step",
-                     "local_radius_action", "local_step_fraction", "failure_cost_size",
-                     "imitation_epsilon", "memory_rebuild_fraction", "explore_distance_size",
-                     "trust_radius_action", "competence_radius_noise",
-                     "competence_floor_noise", "acts_cost_autonomous", "acts_cost_emulation",
-                     "acts_cost_mimicry"), positive),
-    **dict.fromkeys(("alpha", "explore_gain", "min_region_width_size", "explore_action",
-                     "success_tolerance_noise", "interest_noise_correction",
-                     "imitation_count", "local_min_casts",
-                     "local_rank_min_casts", "local_step_support"), at_least(0)),
-    "inverse_model": one_of(*INVERSE_MODELS),
-    "local_step_check": one_of(*STEP_CHECKS),
-    "optimiser": one_of(*OPTIMISERS),
-    "competence_reference": one_of("memory", "fixed"),
-    "region_split": one_of(*SPLIT_QUALITIES),
-}
+LEARNER_BOUNDS = {name: one_of(*r.choices) if r.choices else Bounds(r.low, r.high, r.low_open)
+                  for name, r in RANGES.items()}
+"""The range of each LearnerConfig field as a ROS parameter's check (core/config.RANGES)."""
 
 
 def learner_requirement(name: str) -> str:
