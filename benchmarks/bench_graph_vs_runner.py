@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from sgim_nodes.core.learner_registry import SGIM_D
+
 REPO = Path(__file__).resolve().parent.parent
 
 
@@ -136,7 +138,7 @@ def profile_shares(folder: Path) -> list[str]:
 
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--learner", default="sgim-d")
+    p.add_argument("--learner", default=SGIM_D)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--movements", type=int, default=5000)
     p.add_argument("--eval-every", type=int, default=250)

@@ -34,7 +34,13 @@ sys.path[:0] = [str(REPO / "sgim_nodes"), str(REPO / "sim_bridge")]
 
 from sgim_nodes.core.config import INVERSE_MODELS, LearnerConfig  # noqa: E402
 from sgim_nodes.core.inverse_model import InverseModel  # noqa: E402
-from sgim_nodes.core.learner_registry import make_learner  # noqa: E402
+from sgim_nodes.core.learner_registry import (  # noqa: E402
+    RANDOM,
+    RANDOM_GOALS,
+    SAGGRIAC,
+    SGIM_D,
+    make_learner,
+)
 from sgim_nodes.core.learners import inverse_model_for  # noqa: E402
 from sgim_nodes.core.memory import Memory  # noqa: E402
 from sgim_nodes.core.planar_arm import ARMS  # noqa: E402
@@ -90,8 +96,8 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--worlds", nargs="+", choices=list(ARMS), default=list(ARMS))
-    p.add_argument("--learner", default="saggriac",
-                   choices=("random", "random-goals", "saggriac", "sgim-d"),
+    p.add_argument("--learner", default=SAGGRIAC,
+                   choices=(RANDOM, RANDOM_GOALS, SAGGRIAC, SGIM_D),
                    help="whose memories (default saggriac; random: motor babbling's)")
     p.add_argument("--seeds", type=int, default=3)
     p.add_argument("--movements", type=int, default=3000)

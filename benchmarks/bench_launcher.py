@@ -30,6 +30,7 @@ import yaml
 REPO = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(REPO), str(REPO / "sgim_nodes")]
 
+from sgim_nodes.core.learner_registry import RANDOM  # noqa: E402
 from sgim_nodes.graph.domain import reserve_domain  # noqa: E402
 from sgim_nodes.graph.processes import run_node_pids  # noqa: E402
 
@@ -44,7 +45,7 @@ def movements_logged(run_dir: Path) -> bool:
 def trial(tmp: Path, k: int, sig: signal.Signals, rng: random.Random) -> dict:
     run_dir = tmp / f"trial{k}"
     launcher = subprocess.Popen(
-        [RUN, "random", "--movements", "2000", "--eval-every", "0", "--runs-dir", str(tmp),
+        [RUN, RANDOM, "--movements", "2000", "--eval-every", "0", "--runs-dir", str(tmp),
          "--name", run_dir.name, "--quiet"], stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL, start_new_session=True)
     deadline = time.monotonic() + 180

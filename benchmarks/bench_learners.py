@@ -43,8 +43,13 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(REPO / "sgim_nodes"), str(REPO / "sim_bridge")]
 
 from sgim_nodes.core.config import LearnerConfig  # noqa: E402
+from sgim_nodes.core.learner_registry import RANDOM, RANDOM_GOALS, SAGGRIAC, SGIM_D  # noqa: E402
 from sgim_nodes.core.teaching import DEFAULT_REACHED_RULE, REACHED_RULES  # noqa: E402
-from sgim_nodes.experiments.reports.learners import figure, frame_means  # noqa: E402
+from sgim_nodes.experiments.reports.learners import (  # noqa: E402
+    COMPARISONS,
+    figure,
+    frame_means,
+)
 from sgim_nodes.experiments.runner_jobs import (  # noqa: E402
     FRAME,
     SAME_MEMORY_CASTS,
@@ -54,7 +59,7 @@ from sgim_nodes.experiments.runner_jobs import (  # noqa: E402
     run_job,
 )
 
-LEARNERS = ("random", "random-goals", "saggriac", "sgim-d")
+LEARNERS = (RANDOM, RANDOM_GOALS, SAGGRIAC, SGIM_D)
 
 
 def run_one(job: RunnerJob) -> dict:
@@ -104,12 +109,11 @@ def report(results: list[dict], floors: dict[str, float], movements: int,
             print(f"  {lr:14s} ours {ours.mean():.4f}, nearest {near.mean():.4f}; ours no worse "
                   f"in {int(np.sum(ours <= near))}/{len(ours)} runs (ours - nearest per run: "
                   f"{' '.join(f'{d:+.4f}' for d in ours - near)})")
-        demos = [r["n_demonstrations"] for r in rows if r["learner"] == "sgim-d"]
+        demos = [r["n_demonstrations"] for r in rows if r["learner"] == SGIM_D]
         if demos:
             print(f"demonstrations per sgim-d run: {demos}")
         print("Welch tests (two-sided p):")
-        for a, b in (("random-goals", "random"), ("saggriac", "random"),
-                     ("saggriac", "random-goals"), ("sgim-d", "saggriac")):
+        for a, b in COMPARISONS:
             if a in finals and b in finals:
                 ma, mb = np.mean(finals[a]), np.mean(finals[b])
                 print(f"  {a} vs {b}: {ma:.4f} vs {mb:.4f}, p = {welch(finals[a], finals[b]):.3g}")

@@ -31,6 +31,7 @@ sys.path[:0] = [str(REPO), str(REPO / "sgim_nodes")]
 from sgim_nodes.bag.reader import NotABagError, load_run  # noqa: E402
 from sgim_nodes.bag.types import typestore  # noqa: E402
 from sgim_nodes.bag.writer import BagWriter  # noqa: E402
+from sgim_nodes.core.learner_registry import SGIM_D  # noqa: E402
 from sgim_nodes.graph.domain import isolated_ros_environment, reserve_domain  # noqa: E402
 
 GRACE = 0.5  # finish_grace given to the recorder
@@ -112,7 +113,7 @@ def throughput(tmp: Path, env: dict, pub: Publisher, n: int) -> None:
     for msg in messages:
         pub.movements.publish(msg)
     published = time.perf_counter() - start
-    pub.status.publish(pub.RunStatus(learner="sgim-d", movement_index=n, total_movements=n,
+    pub.status.publish(pub.RunStatus(learner=SGIM_D, movement_index=n, total_movements=n,
                                      state=pub.RunStatus.STATE_FINISHED))
     try:
         child.wait(timeout=300)

@@ -39,6 +39,8 @@ sys.path.insert(0, str(REPO / "benchmarks"))
 
 from bench_graph_vs_runner import node_cpu  # noqa: E402
 
+from sgim_nodes.core.learner_registry import DEMO_ONLY, RANDOM, SAGGRIAC, SGIM_D  # noqa: E402
+
 RUN = REPO / "ros_ws" / "run_experiment.sh"
 CASTS = re.compile(r"casts made (\d+), kept (\d+)")
 
@@ -191,8 +193,8 @@ def main() -> int:
         one_runner(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), Path(sys.argv[5]))
         return 0
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--learners", nargs="+", default=["sgim-d", "saggriac", "demo-only",
-                                                     "random"])
+    p.add_argument("--learners", nargs="+", default=[SGIM_D, SAGGRIAC, DEMO_ONLY,
+                                                     RANDOM])
     p.add_argument("--seeds", type=int, default=2)
     p.add_argument("--movements", type=int, default=2000)
     p.add_argument("--parallel", type=int, default=2, help="runs side by side (the cores)")

@@ -30,6 +30,8 @@ import threading
 import time
 from pathlib import Path
 
+from sgim_nodes.core.learner_registry import SGIM_D
+
 REPO = Path(__file__).resolve().parent.parent
 RUN = REPO / "ros_ws" / "run_experiment.sh"
 FINISHED = re.compile(r"run finished: (\d+) movements in ([0-9.]+) s")
@@ -38,7 +40,7 @@ FINISHED = re.compile(r"run finished: (\d+) movements in ([0-9.]+) s")
 def one_run(out: Path, name: str, movements: int, seed: int, page: bool) -> dict:
     # --web-linger 0: the open page must not keep the graph up after the run (timed to its end).
     child = subprocess.Popen(
-        [str(RUN), "sgim-d", "--seed", str(seed), "--movements", str(movements), "--teacher",
+        [str(RUN), SGIM_D, "--seed", str(seed), "--movements", str(movements), "--teacher",
          "web", "--web-port", "0", "--web-linger", "0", "--runs-dir", str(out), "--name",
          name, "--quiet"],
         stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)

@@ -45,6 +45,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from sgim_nodes.core.learner_registry import SGIM_D
+
 REPO = Path(__file__).resolve().parents[1]
 RUN = str(REPO / "ros_ws" / "run_experiment.sh")
 MOVEMENTS, PERIOD, EVAL_EVERY = 300, 50, 100
@@ -101,7 +103,7 @@ def progress(run_dir: Path) -> int:
 
 
 def run_argv(seed: int, runs: Path, domain: int) -> list[str]:
-    return [RUN, "sgim-d", "--seed", str(seed), "--movements", str(MOVEMENTS), "--period",
+    return [RUN, SGIM_D, "--seed", str(seed), "--movements", str(MOVEMENTS), "--period",
             str(PERIOD), "--eval-every", str(EVAL_EVERY), "--runs-dir", str(runs), "--name",
             f"soak{seed}", "--domain", str(domain), "--quiet", "--timeout", "600"]
 
@@ -310,7 +312,7 @@ def reference_movements(seed: int) -> list[dict]:
     from sgim_nodes.core.social_config import SocialConfig
 
     world = build_world("fishing", seed)
-    learner = make_learner("sgim-d", world.env.action_dim, world.env.outcome_dim, seed,
+    learner = make_learner(SGIM_D, world.env.action_dim, world.env.outcome_dim, seed,
                            scale=world.scale)
     records: list[dict] = []
     run(learner, world, MOVEMENTS, EVAL_EVERY, seed, records.append,

@@ -18,7 +18,7 @@ import argparse
 import numpy as np
 
 from sgim_nodes.core.environment import MovementResult
-from sgim_nodes.core.learner_registry import make_learner
+from sgim_nodes.core.learner_registry import SGIM_D, make_learner
 from sgim_nodes.core.runner import World, run
 from sgim_nodes.core.scale import WorldScale, gaussian_noise_2d
 from sgim_nodes.core.social_config import SocialConfig
@@ -55,7 +55,7 @@ def learn(movements: int, seed: int) -> tuple[list[tuple[int, float]], int]:
     world = World(env=TwoJointArm(seed), eval_env=TwoJointArm(seed + 1), goals=goals,
                   teaching_actions=shown, teaching_outcomes=landed, scale=scale,
                   make_teacher_env=lambda: TwoJointArm(seed + 2))  # the teacher checks here
-    learner = make_learner("sgim-d", TwoJointArm.action_dim, TwoJointArm.outcome_dim,
+    learner = make_learner(SGIM_D, TwoJointArm.action_dim, TwoJointArm.outcome_dim,
                            seed, scale=scale)
     records: list[dict] = []  # every movement, demonstration and evaluation, as plain dicts
     run(learner, world, movements, eval_every=250, seed=seed, write=records.append,
