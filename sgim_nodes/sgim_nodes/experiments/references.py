@@ -276,10 +276,13 @@ def _make(maker: str, todo: Mapping[str, Any], parallel: int,
 
 def experiment_fingerprint(experiment: Any, table: Mapping[str, Any],
                            todays: bool = True) -> str:
-    """What the experiment's runs do: its runs' names and configurations, the reference
-    digest of each configuration (the world's source for a world experiment) and its data
-    files. ReferencesOutdated when the kept references are not today's code's (``todays``;
-    without it, what the table's code did) or lack a configuration."""
+    """What the experiment's runs do: for each run (by its name, seed included), the reference
+    digest of its configuration (the world's source for a world experiment), and its data
+    files. A configuration's id only says which runs share a reference run: a change that
+    renames a configuration but leaves its runs' movements alone (a node that leaves a graph
+    it did nothing in) leaves the fingerprint as it was. ReferencesOutdated when the kept
+    references are not today's code's (``todays``; without it, what the table's code did) or
+    lack a configuration."""
     configs = configurations(experiment)
     entry = table.get(experiment.maker) or {}
     if todays:
@@ -287,7 +290,7 @@ def experiment_fingerprint(experiment: Any, table: Mapping[str, Any],
     elif not entry.get("key"):
         raise ReferencesOutdated(f"no reference of the {experiment.maker} experiments is kept")
     if experiment.maker == "world":
-        behaviour = {"world": str(entry.get("key"))}
+        runs = {name: str(entry.get("key")) for name in configs}
     else:
         digests = kept_digests(entry)
         missing = sorted(set(configs.values()) - set(digests))
@@ -295,9 +298,8 @@ def experiment_fingerprint(experiment: Any, table: Mapping[str, Any],
             raise ReferencesOutdated(
                 f"{experiment.name}: {len(missing)} configuration(s) have no reference run "
                 "yet: `ros_ws/reproduce.sh --references` makes them")
-        behaviour = {c: digests[c] for c in sorted(set(configs.values()))}
-    return fp._digest([fp.canonical(sorted(configs.items())).encode(),
-                       fp.canonical(behaviour).encode(),
+        runs = {name: digests[config] for name, config in configs.items()}
+    return fp._digest([fp.canonical(sorted(runs.items())).encode(),
                        fp.canonical(dict(experiment.data)).encode()])
 
 
