@@ -21,11 +21,11 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from sgim_nodes.core.learner_registry import SGIM_D, learner_names
+from sgim_nodes.core.learner_registry import OWN_NAMES, SGIM_D
 from sgim_nodes.core.social_config import SOCIAL_DEFAULTS
 
 ARGUMENTS = (
-    ("learner", SGIM_D, ", ".join(learner_names())),
+    ("learner", SGIM_D, ", ".join(OWN_NAMES) + ", or another package's"),
     ("seed", "0", "seed of the run"),
     ("movements", "5000", "movement budget (the paper's: 5000)"),
     ("eval_every", "250", "movements between evaluations"),

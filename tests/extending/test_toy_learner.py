@@ -10,16 +10,33 @@ import subprocess
 import numpy as np
 import pytest
 
-from sgim_nodes.core.learner_registry import MODULES_VARIABLE, learner_kind, learner_names
+from sgim_nodes.core.learner_registry import (
+    MODULES_VARIABLE,
+    is_learner,
+    learner_kind,
+    learner_names,
+    register,
+    unregister,
+)
 from tests.conftest import REPO
-from tests.extending import toy_learner
 from tests.golden_runs import SEED, bag_digest, runner_digest, runner_records
 
 MODULE = "tests.extending.toy_learner"
 MOVEMENTS = 30
 
 
-def test_a_registered_learner_is_known_everywhere_a_learner_is_named():
+@pytest.fixture
+def toy_learner():
+    """The toy module, its learner declared during the test only: the other tests of this
+    process see the project's learners alone."""
+    from tests.extending import toy_learner as module  # declares it when first imported
+
+    register(module.KIND)  # again, when another test of this process imported it first
+    yield module
+    unregister(module.TOY)
+
+
+def test_a_registered_learner_is_known_everywhere_a_learner_is_named(toy_learner):
     from sgim_nodes.graph.description import RunOptions, graph
 
     assert toy_learner.TOY in learner_names()
@@ -29,9 +46,17 @@ def test_a_registered_learner_is_known_everywhere_a_learner_is_named():
     nodes = [spec.executable for spec in graph(toy_learner.TOY, markers=False)]
     assert nodes == ["recorder", "sim_bridge", "evaluator", "social_interaction"]
     assert RunOptions(toy_learner.TOY).learner == toy_learner.TOY  # the launcher takes it
+    assert is_learner(toy_learner.TOY)  # and every node's `learner` parameter
 
 
-def test_the_runner_runs_it():
+def test_a_forgotten_learner_is_refused(toy_learner):
+    unregister(toy_learner.TOY)
+    assert not is_learner(toy_learner.TOY)
+    with pytest.raises(ValueError, match="unknown learner 'toy-centre'"):
+        learner_kind(toy_learner.TOY)
+
+
+def test_the_runner_runs_it(toy_learner):
     records = runner_records(toy_learner.TOY, movements=MOVEMENTS, eval_every=0)
     moves = [r for r in records if r["type"] == "movement"]
     assert len(moves) == MOVEMENTS
@@ -40,13 +65,14 @@ def test_the_runner_runs_it():
     assert len({tuple(a) for a in actions}) == MOVEMENTS
 
 
-def test_a_name_no_module_declares_is_refused_with_the_known_ones():
+def test_a_name_no_module_declares_is_refused_with_the_known_ones(toy_learner):
     with pytest.raises(ValueError, match=f"unknown learner 'nobody'.*{toy_learner.TOY}"):
         learner_kind("nobody")
 
 
 @pytest.mark.ros
-def test_the_graph_runs_it_as_the_runner_does(ros_processes, ros_domain, tmp_path):
+def test_the_graph_runs_it_as_the_runner_does(ros_processes, ros_domain, tmp_path,
+                                               toy_learner):
     from sgim_nodes.bag.reader import load_run
 
     ros_processes.env = {**(ros_processes.env or os.environ), MODULES_VARIABLE: MODULE,

@@ -30,6 +30,6 @@ def build(action_dim, outcome_dim, seed, config, scale, teachers, strategies) ->
     return learner
 
 
-register(LearnerKind(TOY, "centre babbling", "tab:olive", build,
-                     "uniform actions in the central half of the action box",
-                     compared=False))
+KIND = register(LearnerKind(TOY, "centre babbling", "tab:olive", build,
+                            "uniform actions in the central half of the action box",
+                            compared=False))

@@ -36,7 +36,7 @@ from sgim_nodes.core.learner_registry import GOAL_BABBLING, kinds
 from sgim_nodes.core.learner_registry import colour as learner_colour
 from sim_bridge.lake import ISOLATED_REGION, draw_shoreline
 
-TREE_LEARNERS = tuple(k.name for k in kinds() if k.host == GOAL_BABBLING)
+TREE_LEARNERS = tuple(k.name for k in kinds(plugins=False) if k.host == GOAL_BABBLING)
 """The learners whose runs draw a region tree of their own goals."""
 BINS = 40
 DPI = 110

@@ -45,7 +45,7 @@ OUTCOME_SIZE = 2
 PROCESS_IMITATION, PROCESS_DEMONSTRATION, PROCESS_EVALUATION = (
     PROCESS_CODES[label] for label in ("imitation", "demonstration", "evaluation"))
 STATUS_OK = int(Status.OK)
-LEARNER_ORDER = compared_names()  # the paper's learners first, in their declared order
+LEARNER_ORDER = compared_names(plugins=False)  # the paper's learners first, in their order
 _RUN_NAME = re.compile(r"^(?P<learner>.+)-seed(?P<seed>\d+)$")
 _WANTED = ("movements", "evaluations", "region_map", "demonstrations", "demonstrations_taken",
            "run_status", "help_requests", "goals")

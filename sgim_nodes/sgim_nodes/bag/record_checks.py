@@ -395,11 +395,11 @@ def check_evaluation(e: Any, limits: Limits) -> Problem | None:
 
 
 def check_run_status(s: Any, limits: Limits) -> Problem | None:
-    from sgim_nodes.core.learner_registry import learner_names
+    from sgim_nodes.core.learner_registry import is_learner
 
     if int(s.state) not in RUN_STATES:
         return Problem("bad-value", f"state {int(s.state)} is unknown")
-    if str(s.learner) not in learner_names():
+    if not is_learner(s.learner):
         return Problem("bad-value", f"learner {str(s.learner)!r} is unknown")
     total = int(s.total_movements)
     if total < 1 or (limits.budget and total != limits.budget):

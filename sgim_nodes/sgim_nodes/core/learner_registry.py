@@ -110,6 +110,11 @@ def register(kind: LearnerKind) -> LearnerKind:
     return kind
 
 
+def unregister(name: str) -> None:
+    """Forget a declaration (a test's learner, once the test is done)."""
+    _KINDS.pop(name, None)
+
+
 def _load_plugins() -> None:
     """Import the learners of other packages once (module docstring)."""
     global _loaded
@@ -127,28 +132,42 @@ def _load_plugins() -> None:
                   f"({error}): its learners are unknown", file=sys.stderr)
 
 
-def kinds() -> tuple[LearnerKind, ...]:
-    """Every learner, the paper's first, in their order of declaration."""
-    _load_plugins()
+def kinds(plugins: bool = True) -> tuple[LearnerKind, ...]:
+    """Every learner, the paper's first, in their order of declaration; without
+    ``plugins``, only those already declared (no other package is looked for: what a module
+    reads when it is imported, so that no process pays for the search it does not need)."""
+    if plugins:
+        _load_plugins()
     return tuple(_KINDS.values())
 
 
-def learner_names() -> tuple[str, ...]:
+def learner_names(plugins: bool = True) -> tuple[str, ...]:
     """Every learner the runner builds and the graph runs."""
-    return tuple(k.name for k in kinds())
+    return tuple(k.name for k in kinds(plugins))
 
 
-def compared_names() -> tuple[str, ...]:
+def compared_names(plugins: bool = True) -> tuple[str, ...]:
     """The paper's learners and its yardsticks, in the studies' order."""
-    return tuple(k.name for k in kinds() if k.compared)
+    return tuple(k.name for k in kinds(plugins) if k.compared)
 
 
 def learner_kind(name: str) -> LearnerKind:
-    """The declaration of learner ``name``; ValueError naming the known ones."""
-    _load_plugins()
+    """The declaration of learner ``name`` (other packages are looked for only when it is not
+    one of the declared ones); ValueError naming the known ones."""
+    if name not in _KINDS:
+        _load_plugins()
     if name not in _KINDS:
         raise ValueError(f"unknown learner {name!r}; choose one of {', '.join(_KINDS)}")
     return _KINDS[name]
+
+
+def is_learner(name: Any) -> bool:
+    """Whether ``name`` names a declared learner."""
+    try:
+        learner_kind(str(name))
+    except ValueError:
+        return False
+    return True
 
 
 def goal_mode_probabilities(config: Any, learner: str) -> tuple[float, float, float]:
@@ -159,14 +178,12 @@ def goal_mode_probabilities(config: Any, learner: str) -> tuple[float, float, fl
 
 def display_name(name: str) -> str:
     """A learner's name in figures and pages; an unknown one as it is written."""
-    _load_plugins()
-    return _KINDS[name].display if name in _KINDS else name
+    return learner_kind(name).display if is_learner(name) else name
 
 
 def colour(name: str) -> str | None:
     """A learner's colour in figures; None for an unknown one or one without its own."""
-    _load_plugins()
-    return _KINDS[name].colour if name in _KINDS else None
+    return learner_kind(name).colour if is_learner(name) else None
 
 
 def make_learner(name: str, action_dim: int, outcome_dim: int, seed: int,
@@ -249,3 +266,6 @@ register(LearnerKind(
     host=EPISODES, chooses_teachers=True, compared=False,
     own_modules=("acts_learner", "acts_runner", "experts", "strategies", "strategy_choice",
                  "strategy_regions", "teacher_turns")))
+
+OWN_NAMES = tuple(_KINDS)
+"""The learners this project declares (the others come from other packages)."""

@@ -24,7 +24,7 @@ import yaml
 
 from sgim_nodes.bag.writer import STORAGES  # the recorder's bag formats, named once
 from sgim_nodes.core.config import LearnerConfig
-from sgim_nodes.core.learner_registry import SGIM_ACTS, learner_kind, learner_names
+from sgim_nodes.core.learner_registry import SGIM_ACTS, is_learner, learner_kind, learner_names
 from sgim_nodes.core.social_config import SOCIAL_DEFAULTS
 from sgim_ros.params import Param, ParameterError
 
@@ -118,7 +118,7 @@ class RunOptions:
 
     def __post_init__(self) -> None:
         problems = []
-        if self.learner not in learner_names():
+        if not is_learner(self.learner):
             problems.append(f"learner must be one of {', '.join(learner_names())}, "
                             f"got {self.learner!r}")
         if self.teacher not in TEACHERS:

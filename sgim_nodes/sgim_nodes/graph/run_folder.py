@@ -21,7 +21,7 @@ from typing import Any
 
 import yaml
 
-from sgim_nodes.core.learner_registry import learner_names
+from sgim_nodes.core.learner_registry import is_learner, learner_names
 from sgim_ros.command_line import YamlProblem, parse_yaml
 from sgim_ros.params import SEED_MAX, seed_problem
 
@@ -109,7 +109,8 @@ def read_metadata(run_dir: Path) -> dict[str, Any]:
     problems = []
     hint = _params_hint(run_dir)
     for key, valid, what in (
-            ("learner", lambda v: v in learner_names(), f"one of {', '.join(learner_names())}"),
+            ("learner", is_learner, f"one of {', '.join(learner_names(plugins=False))} or "
+             "another package's (core/learner_registry.py)"),
             ("seed", lambda v: seed_problem(v) is None, f"an integer in 0..{SEED_MAX}"),
             ("movements", lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= 1,
              "an integer >= 1")):

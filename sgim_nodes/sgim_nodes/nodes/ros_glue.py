@@ -17,7 +17,7 @@ from sgim_msgs.msg import Region, RegionMap
 from sgim_nodes.bag.record_checks import vector_problem
 from sgim_nodes.core.config import RANGES, TIES, LearnerConfig
 from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS  # noqa: F401 - for nodes
-from sgim_nodes.core.learner_registry import SGIM_ACTS, SGIM_D, learner_names
+from sgim_nodes.core.learner_registry import OWN_NAMES, SGIM_ACTS, SGIM_D, is_learner
 from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
 from sgim_nodes.core.scale import WorldScale, unit_box
 from sgim_nodes.core.social_config import declared
@@ -104,7 +104,9 @@ def check_vector(values: Sequence[float], size: int, what: str, bound: float = 1
 
 
 COMMON_PARAMS = (
-    Param("learner", SGIM_D, "which learner the graph runs", one_of(*learner_names())),
+    Param("learner", SGIM_D, "which learner the graph runs", is_learner,
+          f"one of {', '.join(OWN_NAMES)}, or a learner another package declares "
+          "(core/learner_registry.py)"),
     Param("seed", 0, "seed of the run; each node derives its own random stream from it",
           seed_range),
     Param("action_size", ACTION_SIZE, "numbers per action (the world's action size)",

@@ -40,7 +40,7 @@ from sgim_nodes.core.learner_registry import SGIM_ACTS, kinds
 
 ENVIRONMENT_FIELDS = ("code", "world", "data", "numpy", "scipy", "pybullet", "python")
 FIELDS = (*ENVIRONMENT_FIELDS, "learner_code", "parameters")
-LEARNER_MODULES = {k.name: k.own_modules for k in kinds() if k.own_modules}
+LEARNER_MODULES = {k.name: k.own_modules for k in kinds(plugins=False) if k.own_modules}
 """Core modules only one learner imports, as its declaration says
 (tests/provenance/test_fingerprint.py checks that a run of any other learner does not,
 unless its teachers take turns): they count in the ``learner_code`` of those runs only

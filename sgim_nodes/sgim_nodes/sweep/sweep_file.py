@@ -36,7 +36,7 @@ from typing import Any
 
 import yaml
 
-from sgim_nodes.core.learner_registry import learner_kind, learner_names
+from sgim_nodes.core.learner_registry import is_learner, learner_kind, learner_names
 from sgim_nodes.graph import experiment_options
 from sgim_nodes.graph.description import (
     ARBITER_TEACHER,
@@ -279,7 +279,7 @@ def _expand_block(block: dict[str, Any], where: str) -> Iterable[RunSpec]:
         raise SweepFileError(f"{where}: no learner (give 'learner' at the top or in the block)")
     learners = _as_list(block["learner"])
     for learner in learners:
-        if learner not in learner_names():
+        if not is_learner(learner):
             raise SweepFileError(f"{where}: unknown learner {learner!r}; choose among "
                                  f"{', '.join(learner_names())}")
     seeds = _seeds(block.get("seeds", 1), where)
