@@ -2,8 +2,8 @@
 
 It owns the movement count and runs one job at a time: goal attempts (the explorer's
 `reach_goal` action, which asks the goal generator for each goal itself and goes on from goal
-to goal up to the arbiter's next boundary), an imitation (`imitate`), or a random movement,
-according to how the learner's declaration says the graph hosts it
+to goal up to the arbiter's next boundary), an imitation (`imitate`), or a movement of the
+core learner it hosts, according to how the learner's declaration says the graph hosts it
 (core/learner_registry.py):
   goal babbling  the explorer's goal attempts; a social learner's demonstrations are
                  registered in the explorer's memory, imitated `imitation_count` times, and
