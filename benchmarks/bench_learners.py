@@ -177,7 +177,7 @@ def main(argv: list[str] | None = None) -> int:
                    help="the benchmark goals, or other points of their cells (choose there)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a LearnerConfig value for every learner (repeatable)")
-    p.add_argument("--teacher-rule", choices=REACHED_RULES, default=DEFAULT_REACHED_RULE,
+    p.add_argument("--reached-rule", choices=REACHED_RULES, default=DEFAULT_REACHED_RULE,
                    help="when the teacher counts a teaching goal as reached (core/teaching.py; "
                         f"default {DEFAULT_REACHED_RULE})")
     p.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
@@ -192,11 +192,11 @@ def main(argv: list[str] | None = None) -> int:
     for name in args.worlds:
         floors[name], _ = floor(name, args.goals)
     jobs = [RunnerJob(w, lr, s, args.movements, args.eval_every, args.goals,
-                      tuple(sorted(overrides.items())), args.teacher_rule)
+                      tuple(sorted(overrides.items())), args.reached_rule)
             for w in args.worlds for lr in args.learners
             for s in range(args.first_seed, args.first_seed + args.seeds)]
     print(f"{len(jobs)} runs on {args.jobs} processes, goals: {args.goals}, overrides: "
-          f"{overrides or 'none'}, teacher rule: {args.teacher_rule}", file=sys.stderr)
+          f"{overrides or 'none'}, teacher rule: {args.reached_rule}", file=sys.stderr)
     with ProcessPoolExecutor(args.jobs) as pool:
         results = []
         for i, r in enumerate(pool.map(run_one, jobs), 1):
@@ -210,7 +210,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.json:
         args.json.write_text(json.dumps({"floors": floors, "runs": results,
                                          "overrides": overrides,
-                                         "teacher_rule": args.teacher_rule}, default=float))
+                                         "teacher_rule": args.reached_rule}, default=float))
     return 0
 
 

@@ -17,7 +17,7 @@ def test_cli_writes_every_movement_and_evaluation(tmp_path):
     out = tmp_path / "sub" / "run.jsonl"
     assert runner.main(["--learner", "sgim-d", "--movements", "60", "--seed", "1",
                         "--env", "planar-arm", "--eval-every", "20", "--output", str(out),
-                        "--teacher-period", "25", "--quiet"]) == 0
+                        "--demonstration-period", "25", "--quiet"]) == 0
     records = [json.loads(line) for line in out.read_text().splitlines()]
     assert records[0]["type"] == "header" and records[0]["learner"] == "sgim-d"
     assert records[-1]["type"] == "end"
@@ -37,8 +37,8 @@ def test_cli_writes_every_movement_and_evaluation(tmp_path):
 def test_cli_says_how_many_demonstrations_the_teacher_gave(tmp_path, capsys):
     out = tmp_path / "run.jsonl"
     assert runner.main(["--learner", "sgim-d", "--movements", "100", "--env", "planar-arm",
-                        "--eval-every", "0", "--output", str(out), "--teacher-period", "25",
-                        "--teacher-rule", "own-movements", "--teacher-tolerance-noise", "0"]) == 0
+                        "--eval-every", "0", "--output", str(out), "--demonstration-period", "25",
+                        "--reached-rule", "own-movements", "--tolerance-noise", "0"]) == 0
     records = [json.loads(line) for line in out.read_text().splitlines()]
     demos = [r for r in records if r["type"] == "demonstration"]
     assert len(demos) == records[-1]["n_demonstrations"] == 4  # tolerance 0: never reached
@@ -49,7 +49,7 @@ def test_cli_says_how_many_demonstrations_the_teacher_gave(tmp_path, capsys):
     assert "4 demonstrations in 4 teacher turns (own-movements rule, period)" in \
         capsys.readouterr().err
     with pytest.raises(SystemExit):
-        runner.main(["--teacher-rule", "lucky", "--output", str(out)])
+        runner.main(["--reached-rule", "lucky", "--output", str(out)])
 
 
 def test_same_seed_same_file(tmp_path):

@@ -67,7 +67,7 @@ def test_turns_are_deterministic_and_resume_where_they_were():
 def test_the_runner_gives_sgim_d_its_teachers_in_turn(tmp_path):
     out = tmp_path / "run.jsonl"
     assert main(["--env", "planar-arm", "--learner", "sgim-d", "--movements", "200",
-                 "--teacher-period", "50", "--teacher-turns", "west,east,rough",
+                 "--demonstration-period", "50", "--teacher-turns", "west,east,rough",
                  "--eval-every", "0", "--quiet", "--output", str(out)]) == 0
     records = [json.loads(line) for line in out.read_text().splitlines()]
     assert records[0]["teacher"]["turns"] == ["west", "east", "rough"]

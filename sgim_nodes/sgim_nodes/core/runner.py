@@ -27,19 +27,16 @@ import numpy as np
 from .config import LearnerConfig
 from .environment import is_success
 from .evaluator import Evaluator
-from .help_request import DEFAULT_TIMING, ON_REQUEST, TIMINGS, budget_for
+from .help_request import DEFAULT_TIMING, ON_REQUEST, budget_for
 from .learner_base import Learner
 from .learner_registry import SGIM_D, learner_kind, learner_names, make_learner
 from .random_streams import SEED_MAX, component_rng
 from .repeatable_casts import RepeatableCasts
 from .schedule import Schedule
-from .social_config import SOCIAL_DEFAULTS, SocialConfig
+from .social_config import SOCIAL_DEFAULTS, SocialConfig, declared
 from .teaching import (
     ABILITY,
     DEFAULT_DEMONSTRATION_CONTENT,
-    DEMONSTRATION_CONTENTS,
-    REACHED_RULES,
-    TEACHER_CHOICES,
     Teacher,
     Turn,
     learner_progress,
@@ -47,6 +44,9 @@ from .teaching import (
 from .worlds import World, WorldMissing, build_world, world_names
 
 EVALUATION = "evaluation"
+SOCIAL_OPTIONS = ("demonstration_period", "reached_rule", "teacher_choice",
+                  "demonstration_content", "timing", "tolerance_noise")
+"""The SocialConfig settings the command line takes, each as --NAME (underscores as dashes)."""
 
 
 def _vec(x: np.ndarray | None) -> list[float] | None:
@@ -207,37 +207,17 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                         "own, 0.95); benchmark and teaching sets come from SIM_BRIDGE_DATA_DIR")
     p.add_argument("--arm-joints", type=int, default=12,
                    help="planar-arm: number of joints (default: %(default)s)")
-    p.add_argument("--teacher-period", type=int, default=SOCIAL_DEFAULTS.demonstration_period,
-                   help="movements between demonstrations, the paper's P (default: %(default)s)")
-    p.add_argument("--teacher-rule", choices=REACHED_RULES, default=SOCIAL_DEFAULTS.reached_rule,
-                   help="when a teaching goal counts as reached (core/teaching.py): 'ability', "
-                        "the learner's inverse model cast for it lands within the tolerance; "
-                        "'own-movements', one of its own movements landed there "
-                        "(default: %(default)s)")
-    p.add_argument("--teacher-choice", choices=TEACHER_CHOICES,
-                   default=SOCIAL_DEFAULTS.teacher_choice,
-                   help="which unreached teaching goal the teacher demonstrates: at random "
-                        "(the paper), the farthest from what the learner can do, or the "
-                        "nearest (core/teaching.py; default: %(default)s)")
-    p.add_argument("--demonstration-content", choices=DEMONSTRATION_CONTENTS,
-                   default=SOCIAL_DEFAULTS.demonstration_content,
-                   help="what a demonstration shows the learner: the action and its outcome "
-                        "(the paper), the outcome only (emulation) or the action only "
-                        "(core/teaching.py; default: %(default)s)")
-    p.add_argument("--timing", choices=TIMINGS, default=SOCIAL_DEFAULTS.timing,
-                   help="when the teacher speaks: every --teacher-period movements (the "
-                        "paper), or when the learner asks, its competence progress stalled "
-                        "(core/help_request.py; as many asks at most as periodic turns; "
-                        "default: %(default)s)")
+    for name in SOCIAL_OPTIONS:  # the teacher's settings, as core/social_config.py declares
+        d = declared(name)
+        p.add_argument("--" + name.replace("_", "-"), default=d["default"],
+                       choices=d.get("one_of"),
+                       type=None if "one_of" in d else type(d["default"]),
+                       help=f"{d['help']} (SocialConfig.{name}; default: %(default)s)")
     p.add_argument("--teacher-turns", default="",
                    help="several teachers take the teacher's turns, in this order: "
                         "comma-separated names of the world's SGIM-ACTS experts, e.g. "
                         "centre,west,rough on fishing (core/teacher_turns.py; default: one "
                         "teacher who knows the whole teaching set)")
-    p.add_argument("--teacher-tolerance-noise", type=float,
-                   default=SOCIAL_DEFAULTS.tolerance_noise,
-                   help="a teaching goal is reached within this many units of the world's "
-                        "outcome noise (default: %(default)s)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     args = p.parse_args(argv)
     if args.movements < 0:
@@ -247,8 +227,10 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                 "a seed of `learn` is one a graph run takes too")
     if args.eval_every < 0:
         p.error("--eval-every must be >= 0")
-    if args.teacher_tolerance_noise < 0:
-        p.error("--teacher-tolerance-noise must be >= 0")
+    try:
+        SocialConfig(**{name: getattr(args, name) for name in SOCIAL_OPTIONS})
+    except ValueError as error:
+        p.error(f"--{str(error).replace('_', '-')}")
     kind = learner_kind(args.learner)
     if args.strategies is not None and not kind.chooses_teachers:
         p.error(f"--strategies: {args.learner} takes no strategies, it does not choose its "
@@ -295,10 +277,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         except ValueError as error:
             print(f"error: --teacher-turns: {error}", file=sys.stderr)
             return 2
-    social = SocialConfig(demonstration_period=args.teacher_period, timing=args.timing,
-                          reached_rule=args.teacher_rule, teacher_choice=args.teacher_choice,
-                          demonstration_content=args.demonstration_content,
-                          tolerance_noise=args.teacher_tolerance_noise,
+    social = SocialConfig(**{name: getattr(args, name) for name in SOCIAL_OPTIONS},
                           teacher_turns=turns_specs)
     args.output.parent.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
@@ -320,10 +299,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                "outcome_dim": world.env.outcome_dim, "n_goals": len(world.goals),
                "scale": {"low": list(world.scale.low), "high": list(world.scale.high),
                          "noise": world.scale.noise},
-               "teacher": {"period": args.teacher_period, "rule": args.teacher_rule,
+               "teacher": {"period": args.demonstration_period, "rule": args.reached_rule,
                            "choice": args.teacher_choice,
                            "content": args.demonstration_content, "timing": args.timing,
-                           "tolerance_noise": args.teacher_tolerance_noise,
+                           "tolerance_noise": args.tolerance_noise,
                            **({"turns": [s.name for s in turns_specs]} if turns_specs
                               else {})},
                "config": config.to_dict()})
@@ -331,13 +310,13 @@ def main(argv: Sequence[str] | None = None) -> int:
                     social, progress=bar.update)
         demos = counts["demonstration"]  # goal- or means-only ones are not in memory
         turns = ((counts["help_request"] if args.timing == ON_REQUEST else
-                  budget_for(args.movements, args.teacher_period))
+                  budget_for(args.movements, args.demonstration_period))
                  if learner.social else 0)
         write({"type": "end", "final_mean_distance": means[-1], "n_memory": len(learner.memory),
                "n_demonstrations": demos, "n_teacher_turns": turns,
                "n_failures": learner.n_failures, "elapsed_s": time.perf_counter() - start})
     if not args.quiet:
-        taught = (f"{demos} demonstrations in {turns} teacher turns ({args.teacher_rule} rule, "
+        taught = (f"{demos} demonstrations in {turns} teacher turns ({args.reached_rule} rule, "
                   f"{args.timing})"
                   if learner.social else "no teacher")
         print(f"{args.learner}: final mean distance {means[-1]:.4f}, {taught} "
