@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, fields
 from typing import Any
 
+from .config import AT_LEAST_ONE, NON_NEGATIVE, Range
 from .help_request import DEFAULT_TIMING, ON_REQUEST, TIMINGS
 from .teaching import (
     DEFAULT_DEMONSTRATION_CONTENT,
@@ -29,42 +30,48 @@ from .teaching import (
 class SocialConfig:
     """The social settings of a run (sources in each field's docstring). A field's metadata
     holds its meaning in one line (``help``: the ROS parameter's and the YAML's) and its
-    bounds: ``one_of`` (its choices) or ``at_least`` (its smallest value)."""
+    ``range`` (config.Range, as LearnerConfig's fields)."""
 
     demonstration_period: int = field(default=PAPER_PERIOD, metadata={
-        "at_least": 1, "help": "the paper's P: the automatic teacher's turn every P movements "
+        "range": AT_LEAST_ONE,
+        "help": "the paper's P: the automatic teacher's turn every P movements "
         "(on request: one ask earned per P)"})
     """The automatic teacher's period P: a turn at movements 0, P, 2P, ... (the paper: 150).
     On request, the learner earns one ask per P movements."""
 
     timing: str = field(default=DEFAULT_TIMING, metadata={
-        "one_of": TIMINGS, "help": "when the automatic teacher speaks: period (every P "
+        "range": Range(choices=TIMINGS),
+        "help": "when the automatic teacher speaks: period (every P "
         "movements, the paper) or on-request (when the learner asks; the arbiter and the "
         "teacher read it)"})
     """When the automatic teacher speaks: 'period' (every P movements, the paper) or
     'on-request' (when the learner asks, its progress stalled; core/help_request.py)."""
 
     reached_rule: str = field(default=DEFAULT_REACHED_RULE, metadata={
-        "one_of": REACHED_RULES, "help": "reached = the learner's inverse model cast for the "
+        "range": Range(choices=REACHED_RULES),
+        "help": "reached = the learner's inverse model cast for the "
         "goal lands within the tolerance (own-movements: one of its own movements did)"})
     """When a teaching goal counts as reached: 'ability' (the learner's inverse model cast for
     it lands within the tolerance) or 'own-movements' (one of its own movements landed there);
     core/teaching.py."""
 
     teacher_choice: str = field(default=DEFAULT_TEACHER_CHOICE, metadata={
-        "one_of": TEACHER_CHOICES, "help": "which unreached goal: random-unreached (the "
+        "range": Range(choices=TEACHER_CHOICES),
+        "help": "which unreached goal: random-unreached (the "
         "paper), farthest-unreached or nearest-unreached"})
     """Which unreached teaching goal the teacher shows: 'random-unreached' (the paper),
     'farthest-unreached' or 'nearest-unreached' (from what the learner can do)."""
 
     demonstration_content: str = field(default=DEFAULT_DEMONSTRATION_CONTENT, metadata={
-        "one_of": DEMONSTRATION_CONTENTS, "help": "what it shows: means-and-goal (the paper), "
+        "range": Range(choices=DEMONSTRATION_CONTENTS),
+        "help": "what it shows: means-and-goal (the paper), "
         "goal-only (the outcome: emulation) or means-only (the action)"})
     """What a demonstration shows: 'means-and-goal' (the action and its outcome, the paper),
     'goal-only' (the outcome: emulation) or 'means-only' (the action); core/teaching.py."""
 
     tolerance_noise: float = field(default=DEFAULT_TOLERANCE_NOISE, metadata={
-        "at_least": 0.0, "help": "a teaching goal counts as reached within this many units of "
+        "range": NON_NEGATIVE,
+        "help": "a teaching goal counts as reached within this many units of "
         "the world's outcome noise"})
     """A teaching goal counts as reached within this many units of the world's outcome
     noise."""
@@ -76,15 +83,12 @@ class SocialConfig:
     def __post_init__(self) -> None:
         for f in fields(self):
             value = getattr(self, f.name)
-            if "one_of" in f.metadata and value not in f.metadata["one_of"]:
-                raise ValueError(f"{f.name} must be one of {', '.join(f.metadata['one_of'])}, "
-                                 f"got {value!r}")
-            low = f.metadata.get("at_least")
-            if low is not None and not value >= low:
-                raise ValueError(f"{f.name} must be >= {low:g}, got {value!r}")
+            problem = f.metadata["range"].problem(value) if "range" in f.metadata else ""
+            if problem:
+                raise ValueError(f"{f.name} {problem}, got {value!r}")
         if self.teacher_turns and self.timing == ON_REQUEST:
-            raise ValueError("teachers taking turns speak at their boundaries: timing "
-                             "on-request has one teacher")
+            raise ValueError("teacher_turns speak at their boundaries: timing on-request has "
+                             "one teacher")
 
 
 SOCIAL_DEFAULTS = SocialConfig()
@@ -92,6 +96,6 @@ SOCIAL_DEFAULTS = SocialConfig()
 
 
 def declared(name: str) -> dict[str, Any]:
-    """A setting's declaration: its default and its metadata (help, bounds)."""
+    """A setting's declaration: its default and its metadata (help, range)."""
     f = next(f for f in fields(SocialConfig) if f.name == name)
     return {"default": getattr(SOCIAL_DEFAULTS, name), **f.metadata}

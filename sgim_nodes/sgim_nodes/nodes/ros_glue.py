@@ -15,7 +15,7 @@ from rclpy.node import Node
 
 from sgim_msgs.msg import Region, RegionMap
 from sgim_nodes.bag.record_checks import vector_problem
-from sgim_nodes.core.config import RANGES, TIES, LearnerConfig
+from sgim_nodes.core.config import RANGES, TIES, LearnerConfig, Range
 from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS  # noqa: F401 - for nodes
 from sgim_nodes.core.learner_registry import OWN_NAMES, SGIM_ACTS, SGIM_D, is_learner
 from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
@@ -24,6 +24,7 @@ from sgim_nodes.core.social_config import declared
 from sgim_ros.entry import AsyncNode, run_node  # noqa: F401 - the nodes' shared entry point
 from sgim_ros.params import (
     Bounds,
+    OneOf,
     Param,
     ParameterError,
     at_least,
@@ -121,8 +122,13 @@ COMMON_PARAMS = (
     Param("resume_segments", 0, "how many of its recordings to read (0: all)", at_least(0)),
 )
 
-LEARNER_BOUNDS = {name: one_of(*r.choices) if r.choices else Bounds(r.low, r.high, r.low_open)
-                  for name, r in RANGES.items()}
+def ros_check(bound: Range) -> OneOf | Bounds:
+    """A core range (core/config.Range) as a ROS parameter's check."""
+    return one_of(*bound.choices) if bound.choices else Bounds(bound.low, bound.high,
+                                                                bound.low_open)
+
+
+LEARNER_BOUNDS = {name: ros_check(r) for name, r in RANGES.items()}
 """The range of each LearnerConfig field as a ROS parameter's check (core/config.RANGES)."""
 
 
@@ -174,10 +180,8 @@ def social_params(*names: str) -> tuple[Param, ...]:
     params = []
     for name in names:
         d = declared(name)
-        check = (one_of(*d["one_of"]) if "one_of" in d
-                 else at_least(d["at_least"]) if "at_least" in d else None)
         params.append(Param(name, d["default"], f"{d['help']}; SocialConfig.{name} in "
-                            "core/social_config.py", check))
+                            "core/social_config.py", ros_check(d["range"])))
     return tuple(params)
 
 
