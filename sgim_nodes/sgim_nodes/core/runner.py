@@ -15,6 +15,7 @@ Example:
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 import time
@@ -27,7 +28,7 @@ import numpy as np
 from .config import LearnerConfig
 from .environment import is_success
 from .evaluator import Evaluator
-from .help_request import DEFAULT_TIMING, ON_REQUEST, budget_for
+from .help_request import ON_REQUEST, budget_for
 from .learner_base import Learner
 from .learner_registry import SGIM_D, learner_kind, learner_names, make_learner
 from .random_streams import SEED_MAX, component_rng
@@ -36,7 +37,6 @@ from .schedule import Schedule
 from .social_config import SOCIAL_DEFAULTS, SocialConfig, declared
 from .teaching import (
     ABILITY,
-    DEFAULT_DEMONSTRATION_CONTENT,
     Teacher,
     Turn,
     learner_progress,
@@ -116,8 +116,7 @@ def run(learner: Learner, world: World, movements: int, eval_every: int,
 def _run(learner: Learner, world: World, movements: int, eval_every: int,
          write: Callable[[dict[str, Any]], None], teacher: Teacher | None, teacher_rule: str,
          teacher_env: RepeatableCasts | None, progress: Callable[[int], None] | None,
-         content: str = DEFAULT_DEMONSTRATION_CONTENT,
-         schedule: Schedule | None = None) -> list[float]:
+         content: str, schedule: Schedule) -> list[float]:
     evaluator = Evaluator(world.eval_env, world.goals, world.scale.diagonal)
     means: list[float] = []
 
@@ -126,7 +125,6 @@ def _run(learner: Learner, world: World, movements: int, eval_every: int,
         means.append(res.mean_distance)
         write({"type": EVALUATION, "movements": count, **res.to_dict()})
 
-    schedule = schedule or Schedule(movements, 1, DEFAULT_TIMING, teacher=False)
     for i in range(movements):
         if eval_every > 0 and i % eval_every == 0:
             evaluate(i)
@@ -209,9 +207,9 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                    help="planar-arm: number of joints (default: %(default)s)")
     for name in SOCIAL_OPTIONS:  # the teacher's settings, as core/social_config.py declares
         d = declared(name)
-        p.add_argument("--" + name.replace("_", "-"), default=d["default"],
-                       choices=d.get("one_of"),
-                       type=None if "one_of" in d else type(d["default"]),
+        choices = d["range"].choices or None
+        p.add_argument("--" + name.replace("_", "-"), default=d["default"], choices=choices,
+                       type=None if choices else type(d["default"]),
                        help=f"{d['help']} (SocialConfig.{name}; default: %(default)s)")
     p.add_argument("--teacher-turns", default="",
                    help="several teachers take the teacher's turns, in this order: "
@@ -227,9 +225,11 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                 "a seed of `learn` is one a graph run takes too")
     if args.eval_every < 0:
         p.error("--eval-every must be >= 0")
-    try:
-        SocialConfig(**{name: getattr(args, name) for name in SOCIAL_OPTIONS})
-    except ValueError as error:
+    try:  # the teachers' names are checked against the world in main()
+        args.social = SocialConfig(**{name: getattr(args, name) for name in SOCIAL_OPTIONS},
+                                   teacher_turns=tuple(filter(None,
+                                                              args.teacher_turns.split(","))))
+    except ValueError as error:  # its messages start with the setting's name
         p.error(f"--{str(error).replace('_', '-')}")
     kind = learner_kind(args.learner)
     if args.strategies is not None and not kind.chooses_teachers:
@@ -237,9 +237,6 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                 "teachers")
     if args.pond_radius is not None and args.env != "fishing":
         p.error("--pond-radius needs --env fishing")
-    if args.teacher_turns and args.timing == ON_REQUEST:
-        p.error("--teacher-turns speak at their boundaries: --timing on-request has one "
-                "teacher")
     refusal = kind.refusal(args.timing, args.demonstration_content)
     if refusal:
         p.error(refusal)
@@ -277,8 +274,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         except ValueError as error:
             print(f"error: --teacher-turns: {error}", file=sys.stderr)
             return 2
-    social = SocialConfig(**{name: getattr(args, name) for name in SOCIAL_OPTIONS},
-                          teacher_turns=turns_specs)
+    social = dataclasses.replace(args.social, teacher_turns=turns_specs)
     args.output.parent.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
     with args.output.open("w") as f, tqdm(total=args.movements, disable=args.quiet,
