@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from importlib.metadata import entry_points
 from typing import TYPE_CHECKING, Any
 
+from .help_request import ON_REQUEST
 from .teaching import GOAL_ONLY, MEANS_AND_GOAL, MEANS_ONLY
 
 if TYPE_CHECKING:  # the learners import this module; their classes are built lazily
@@ -90,7 +91,7 @@ class LearnerKind:
     def refusal(self, timing: str | None = None, content: str | None = None) -> str:
         """Why this learner cannot play a social mode (timing, demonstration content), or ''.
         One rule for the runner, the graph's description and the arbiter."""
-        if timing == "on-request" and self.social and not self.asks:
+        if timing == ON_REQUEST and self.social and not self.asks:
             asking = ", ".join(k.name for k in kinds() if k.asks)
             return (f"{self.name} attempts no goals, so it never asks: timing on-request "
                     f"needs a learner that asks ({asking})")

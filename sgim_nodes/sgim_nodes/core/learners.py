@@ -65,11 +65,12 @@ class DemoOnlyLearner(Learner):
         self.latest_demo = np.asarray(action, dtype=float).copy()
         self.latest_outcome = None if outcome is None else np.asarray(outcome, dtype=float).copy()
         if outcome is not None:  # a means-only demonstration: the outcome was not shown
-            self.memory.add(self.latest_demo, np.asarray(outcome, dtype=float), DEMONSTRATION)
+            self.memory.add(self.latest_demo, self.latest_outcome, DEMONSTRATION)
 
     def aim(self) -> np.ndarray | None:
-        """The demonstrated outcome its variations aim at (None before the first)."""
-        return None if self.latest_demo is None else self.latest_outcome
+        """The demonstrated outcome its variations aim at (None before the first, or after a
+        means-only one)."""
+        return self.latest_outcome
 
     def next_action(self) -> tuple[np.ndarray, str]:
         if self.latest_demo is None:

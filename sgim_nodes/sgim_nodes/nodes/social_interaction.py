@@ -112,18 +112,19 @@ class SocialInteraction(AsyncNode):
         if on_request and not self.automatic:
             raise ParameterError("timing 'on-request' needs the automatic teacher (teacher: "
                                  "automatic): it answers the learner's help requests")
-        if on_request and self.kind.refusal(timing=ON_REQUEST):
-            raise ParameterError(self.kind.refusal(timing=ON_REQUEST))
+        refusal = self.kind.refusal(timing=ON_REQUEST) if on_request else ""
+        if refusal:
+            raise ParameterError(refusal)
         # When the teacher takes its turn and the learner asks: the core's schedule, as the
         # runner's (core/schedule.py); the arbiter caps its jobs where it says.
         self.schedule = Schedule(self.total, values["demonstration_period"], values["timing"],
                                  teacher=self.automatic)
         self.social = social
-        self.distances = self.config.distances(world_scale(values))
+        scale = world_scale(values)
+        self.distances = self.config.distances(scale)
         # The core learner itself, when the arbiter hosts it (module docstring).
         self.hosted = (make_learner(self.learner, values["action_size"],
-                                    values["outcome_size"], values["seed"], self.config,
-                                    world_scale(values))
+                                    values["outcome_size"], values["seed"], self.config, scale)
                        if self.kind.host == IN_ARBITER else None)
         self.count = 0
         self.goals_folded = 0  # competences published so far (by the explorer and by us)
@@ -405,11 +406,10 @@ class SocialInteraction(AsyncNode):
 
 
 def shown_parts(demo) -> tuple:
-    """(action, outcome) of a demonstration as a core learner takes them: None for the part
-    its content does not show (core/teaching.py)."""
-    action = vec(demo.action) if len(demo.action) and demo.content != GOAL_ONLY else None
-    outcome = vec(demo.outcome) if len(demo.outcome) and demo.content != MEANS_ONLY else None
-    return action, outcome
+    """(action, outcome) of a validated demonstration as a core learner takes them: None for
+    the part its content does not show, which validation leaves empty (bag/record_checks.py)."""
+    return (vec(demo.action) if len(demo.action) else None,
+            vec(demo.outcome) if len(demo.outcome) else None)
 
 
 def main(args: list[str] | None = None) -> int:

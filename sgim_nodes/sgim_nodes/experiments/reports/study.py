@@ -157,7 +157,7 @@ def findings(numbers: StudyNumbers, groups: dict[str, dict[str, list[float]]]) -
     far = groups["far"]
     if SGIM_D in far and DEMO_ONLY in far:
         t = compare(SGIM_D, far[SGIM_D], DEMO_ONLY, far[DEMO_ONLY])
-        side = "SGIM-D" if t.closer == SGIM_D else "demonstrations only"
+        side = display_name(SGIM_D if t.closer == SGIM_D else DEMO_ONLY)
         lines[-1] += (f" On the goals far from every demonstration: SGIM-D "
                       f"{num(float(np.mean(far[SGIM_D])))} against "
                       f"{num(float(np.mean(far[DEMO_ONLY])))}, {side} closer (p: Welch "
