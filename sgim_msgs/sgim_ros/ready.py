@@ -33,16 +33,17 @@ def unmatched(subscriptions: Mapping[str, Any], topics: list[str],
     return missing
 
 
-def serve_ready(node: Node, service: str, subscriptions: Mapping[str, Any],
+def serve_ready(node: Node, service: Any, subscriptions: Mapping[str, Any],
                 servers: Mapping[str, Any] | None = None) -> Any:
-    """Serve `service` (RecorderReady) for `subscriptions`, keyed by the topic name as
+    """Serve `service` (a RecorderReady endpoint, made by its `create(node, callback)`: the
+    node's declaration) for `subscriptions`, keyed by the topic name as
     subscribed (relative, e.g. 'movements' or 'markers/landings'): ready when
     each one the caller names has matched at least as many publishers as the caller sees,
     and when this node's clients in `servers` (by service name) see their server (a node that
     calls a service in the middle of a job must not find it missing on its first call).
     The mapping is read at each call, so subscriptions added later count too."""
     if not subscriptions:
-        raise ValueError(f"{service}: a ready service needs at least one subscription")
+        raise ValueError(f"{service.name}: a ready service needs at least one subscription")
 
     def answer(request: RecorderReady.Request, response: RecorderReady.Response):
         missing = unmatched(subscriptions, list(request.topics), list(request.publishers))
@@ -52,4 +53,4 @@ def serve_ready(node: Node, service: str, subscriptions: Mapping[str, Any],
         response.message = "" if not missing else "not yet matched: " + ", ".join(missing)
         return response
 
-    return node.create_service(RecorderReady, service, answer)
+    return service.create(node, answer)

@@ -21,8 +21,8 @@ from rclpy.node import Node
 
 from sgim_msgs.msg import Movement
 from sgim_msgs.srv import ExecuteAction
-from sgim_ros import qos
 from sgim_ros.entry import run_node
+from sgim_ros.interfaces import declared, publishes, serves
 from sgim_ros.params import Bounds, Param, declare, non_negative, seed_range
 from sgim_ros.record_key import from_environment, movement_signature
 from sim_bridge.fishing_world import DEFAULT_NOISE, DEFAULT_TIME_STEP, FishingWorld
@@ -42,6 +42,9 @@ PARAMS = (  # all read-only: they are the run's physics, recorded in its metadat
           lambda v: all(name.strip() for name in v.split(",")), "comma-separated node names"),
 )
 
+MOVEMENTS, EXECUTE = publishes("movements"), serves("execute_action")
+INTERFACES = declared(MOVEMENTS, EXECUTE)
+
 
 class SimBridgeNode(Node):
     def __init__(self) -> None:
@@ -53,7 +56,7 @@ class SimBridgeNode(Node):
         self.cursor = NoiseCursor(self.world)
         self.executed = 0
         self._key = from_environment()  # the run's record key (sgim_ros/record_key.py)
-        self._movements = self.create_publisher(Movement, "movements", qos.RECORDS)
+        self._movements = MOVEMENTS.create(self)
         self._service = None
         self._listeners = {name.strip() for name in p["movement_listeners"].split(",")}
         if p["wait_for_recorder"]:
@@ -66,7 +69,7 @@ class SimBridgeNode(Node):
         )
 
     def _open(self) -> None:
-        self._service = self.create_service(ExecuteAction, "execute_action", self._execute)
+        self._service = EXECUTE.create(self, self._execute)
 
     def _open_when_recorded(self) -> None:
         """Clients wait for the service, so holding it back holds every movement back until

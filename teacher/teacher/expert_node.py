@@ -43,7 +43,7 @@ from sgim_nodes.core.random_streams import world_seed
 from sgim_nodes.core.strategies import check_teacher_name
 from sgim_nodes.core.teaching import GOAL_ONLY, MEANS_AND_GOAL, MEANS_ONLY
 from sgim_nodes.nodes.ros_glue import COMMON_PARAMS, floats, run_node, vec, world_scale
-from sgim_ros import qos
+from sgim_ros.interfaces import declared, publishes, serves, subscribes
 from sgim_ros.params import Param, ParameterError, declare, non_negative
 from sgim_ros.ready import serve_ready
 from sim_bridge.data_params import TEACHING_SET_FILE
@@ -88,6 +88,11 @@ def expert_spec(name: str, part: str, precision: float, radius_size: float) -> E
         return WORLD_EXPERTS[name]
     return ExpertSpec(name, part, precision, radius_size or math.inf)
 
+# The node lives in its teacher's namespace (/NAME); the run's topics are in the root one.
+DEMONSTRATIONS, REQUESTS = publishes("/demonstrations"), subscribes("/help_requests")
+STATUS, READY = subscribes("/run_status"), serves("expert_ready")
+INTERFACES = declared(DEMONSTRATIONS, REQUESTS, STATUS, READY)
+
 
 class ExpertNode(Node):
     def __init__(self) -> None:
@@ -114,13 +119,12 @@ class ExpertNode(Node):
         self.gate = LiveGate(self.get_logger().error, Limits(
             p["action_size"], p["outcome_size"], budget=p["movements"],
             teaching_set_size=len(ts.actions)))
-        self._out = self.create_publisher(Demonstration, "/demonstrations", qos.RECORDS)
-        requests = self.create_subscription(HelpRequest, "/help_requests", self._on_request,
-                                            qos.RECORDS)
+        self._out = DEMONSTRATIONS.create(self)
+        requests = REQUESTS.create(self, self._on_request)
         # A request missed before the DDS match would leave the learner waiting: the arbiter
         # asks <namespace>/expert_ready before its first movement (sgim_ros/ready.py).
-        serve_ready(self, "expert_ready", {"help_requests": requests})
-        self.create_subscription(RunStatus, "/run_status", self._on_status, qos.RECORDS)
+        serve_ready(self, READY, {"help_requests": requests})
+        STATUS.create(self, self._on_status)
         radius = ("no radius" if math.isinf(self.expert.radius)
                   else f"radius {self.expert.radius:g}")
         self.get_logger().info(f"expert {name}: {len(self.expert.rows)} demonstrations "

@@ -50,7 +50,7 @@ from sgim_msgs.srv import ExecuteAction, Pace
 from sgim_nodes.bag.record_checks import Limits
 from sgim_nodes.bag.validation import LiveGate
 from sgim_nodes.nodes.picture_feed import REACH_PARAMS, reach_tolerance
-from sgim_ros import qos
+from sgim_ros.interfaces import calls, declared, publishes, serves, subscribes
 from sgim_ros.params import Param, ParameterError, declare, positive
 from sgim_ros.ready import serve_ready
 from sim_bridge.data_files import load_teaching_set
@@ -88,6 +88,13 @@ PARAMS = (
 PACE_COMMANDS = {"pause": Pace.Request.PAUSE, "resume": Pace.Request.RESUME,
                  "step": Pace.Request.STEP}
 
+DEMONSTRATIONS, READY = publishes("demonstrations"), serves("teacher_ready")
+MOVEMENTS, EVALUATIONS = subscribes("movements"), subscribes("evaluations")
+STATUS, PACE_STATE = subscribes("run_status"), subscribes("pace_state")
+EXECUTE, PACE = calls("execute_action"), calls("pace")
+INTERFACES = declared(DEMONSTRATIONS, READY, MOVEMENTS, EVALUATIONS, STATUS, PACE_STATE,
+                      EXECUTE, PACE)
+
 
 class HumanInputNode(Node):
     def __init__(self, out: TextIO = sys.stdout, echo: bool = False,
@@ -119,18 +126,14 @@ class HumanInputNode(Node):
         self.gate = LiveGate(self.get_logger().warning,
                              Limits(self.library.action_size, OUTCOME_SIZE))
         self.gate.movements.resync()
-        self._demos = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
+        self._demos = DEMONSTRATIONS.create(self)
         # The arbiter starts once this has matched (sgim_ros/ready.py).
-        serve_ready(self, "teacher_ready", {"movements": self.create_subscription(
-            Movement, "movements", self._locked(self._on_movement), qos.RECORDS)})
-        self.create_subscription(Evaluation, "evaluations", self._locked(self._on_evaluation),
-                                 qos.RECORDS)
-        self.create_subscription(RunStatus, "run_status", self._locked(self._on_status),
-                                 qos.RECORDS)
-        self.create_subscription(PaceState, "pace_state", self._locked(self._on_pace),
-                                 qos.LATEST_STATE)
-        self._execute = self.create_client(ExecuteAction, "execute_action")
-        self._pace = self.create_client(Pace, "pace")
+        serve_ready(self, READY, {"movements": MOVEMENTS.create(
+            self, self._locked(self._on_movement))})
+        EVALUATIONS.create(self, self._locked(self._on_evaluation))
+        STATUS.create(self, self._locked(self._on_status))
+        PACE_STATE.create(self, self._locked(self._on_pace))
+        self._execute, self._pace = EXECUTE.create(self), PACE.create(self)
         self.say(f"human teacher: {len(self.library.actions)} teaching-set entries from "
                  f"{where}, reach tolerance {self.library.teacher.tolerance:g}; type 'help' "
                  "for the commands")

@@ -64,7 +64,7 @@ from sgim_nodes.core.teaching import (
 from sgim_nodes.core.teaching import (
     Demonstration as Shown,
 )
-from sgim_nodes.nodes.movement_memory import MovementMemory
+from sgim_nodes.nodes.movement_memory import MOVEMENTS, MovementMemory
 from sgim_nodes.nodes.ros_glue import (
     declare_learner,
     floats,
@@ -74,7 +74,7 @@ from sgim_nodes.nodes.ros_glue import (
     vec,
     world_scale,
 )
-from sgim_ros import qos
+from sgim_ros.interfaces import declared, publishes, serves, subscribes
 from sgim_ros.params import Param, ParameterError, non_negative
 from sgim_ros.ready import serve_ready
 from sim_bridge.data_params import TEACHING_SET_FILE
@@ -110,6 +110,12 @@ def teacher_turns(p: dict, ts, tolerance: float):
                                                  noise=p["noise"]), Lake().part_of_outcome)
     except ValueError as error:
         raise ParameterError(f"parameter 'teacher_turns': {error}") from error
+
+CHECKS, DEMONSTRATIONS = publishes("teacher_checks"), publishes("demonstrations")
+TAKEN, STATUS = subscribes("demonstrations_taken"), subscribes("run_status")
+REQUESTS = subscribes("help_requests", "timing on-request")
+READY = serves("teacher_ready")
+INTERFACES = declared(CHECKS, DEMONSTRATIONS, TAKEN, STATUS, REQUESTS, READY, MOVEMENTS)
 
 
 class TeacherNode(Node):
@@ -159,20 +165,16 @@ class TeacherNode(Node):
             self.given = point.demonstrations_given
         # The arbiter waits for a publisher of both and for the recorder to match them
         # (nodes/graph_startup.py): no turn's checks are lost, the first one's included.
-        self._checks = self.create_publisher(TeacherCheck, "teacher_checks", qos.RECORDS)
-        self._out = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
+        self._checks, self._out = CHECKS.create(self), DEMONSTRATIONS.create(self)
         # The arbiter starts once these have matched (sgim_ros/ready.py): a missed movement
         # would leave the mirrored memory, and so the teacher's choice, behind the learner's.
         listened = {
             "movements": self.memory.subscription,
-            "demonstrations_taken": self.create_subscription(
-                Demonstration, "demonstrations_taken", self._on_taken, qos.RECORDS),
-            "run_status": self.create_subscription(
-                RunStatus, "run_status", self._on_status, qos.RECORDS)}
+            "demonstrations_taken": TAKEN.create(self, self._on_taken),
+            "run_status": STATUS.create(self, self._on_status)}
         if self.on_request:  # an ask missed would leave the learner waiting for its answer
-            listened["help_requests"] = self.create_subscription(
-                HelpRequest, "help_requests", self._on_request, qos.RECORDS)
-        serve_ready(self, "teacher_ready", listened)
+            listened["help_requests"] = REQUESTS.create(self, self._on_request)
+        serve_ready(self, READY, listened)
         when = ("on request" if self.on_request else
                 f"period {p['demonstration_period']}")
         self.get_logger().info(f"{len(ts.actions)} teaching entries, {when}, reached rule "

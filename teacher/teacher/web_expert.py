@@ -26,11 +26,17 @@ from rclpy.node import Node
 from sgim_msgs.msg import Demonstration, Goal, HelpRequest
 from sgim_nodes.bag.record_checks import expert_source
 from sgim_nodes.core.teaching import GOAL_ONLY, MEANS_AND_GOAL
-from sgim_ros import qos
+from sgim_ros.interfaces import serves, subscribes
 from sgim_ros.ready import serve_ready
 from teacher.human_commands import CommandError, NoneThere  # noqa: F401 - the page's command
 
 WEB_EXPERT = "web"
+# With the parameter `expert`, in the web teacher's INTERFACES (its node is in the root
+# namespace: the ready service is /web/expert_ready, where the arbiter asks).
+AS_EXPERT = "expert: the web page is one of sgim-acts's teachers"
+REQUESTS, GOALS = subscribes("/help_requests", AS_EXPERT), subscribes("goals", AS_EXPERT)
+READY = serves(f"{WEB_EXPERT}/expert_ready", AS_EXPERT)
+WEB_EXPERT_INTERFACES = (REQUESTS, GOALS, READY)
 """The name the web teacher answers SGIM-ACTS's requests under (a run's `teachers` lists it)."""
 
 
@@ -48,11 +54,9 @@ class WebExpert:
         self.source = expert_source(WEB_EXPERT)
         self.open: list[HelpRequest] = []
         self.answered: set[int] = set()
-        requests = node.create_subscription(HelpRequest, "/help_requests", self._on_request,
-                                            qos.RECORDS)
-        node.create_subscription(Goal, "goals", self._on_goal, qos.RECORDS)
-        # In the root namespace, as the node: /web/expert_ready, where the arbiter asks.
-        serve_ready(node, "web/expert_ready", {"help_requests": requests})
+        requests = REQUESTS.create(node, self._on_request)
+        GOALS.create(node, self._on_goal)
+        serve_ready(node, READY, {"help_requests": requests})
 
     def _on_goal(self, goal: Goal) -> None:
         if goal.strategy:

@@ -48,10 +48,15 @@ from rclpy.task import Future
 
 from sgim_msgs.msg import Demonstration, Movement, PaceState, RunStatus
 from sgim_msgs.srv import ExecuteAction, Pace
-from sgim_nodes.nodes.picture_feed import REACH_PARAMS, follow, reach_tolerance
+from sgim_nodes.nodes.picture_feed import (
+    PICTURE_INTERFACES,
+    REACH_PARAMS,
+    follow,
+    reach_tolerance,
+)
 from sgim_nodes.view.picture import LivePicture
-from sgim_ros import qos
 from sgim_ros.entry import run_node
+from sgim_ros.interfaces import calls, declared, publishes, serves, subscribes
 from sgim_ros.params import Param, ParameterError, declare, non_negative, positive
 from sgim_ros.ready import serve_ready
 from sim_bridge.data_files import load_teaching_set
@@ -68,7 +73,7 @@ from teacher.web.app import WebTeacher
 from teacher.web.cast_pictures import CastRenderer, lake_png
 from teacher.web.pacing import SETTLE, PacePlan, PaceReply, Request
 from teacher.web.server import RUN_OVER, Api, Refused, RunOver, serve
-from teacher.web_expert import WEB_EXPERT, WebExpert
+from teacher.web_expert import WEB_EXPERT, WEB_EXPERT_INTERFACES, WebExpert
 
 PARAMS = (
     Param("host", "127.0.0.1", "interface to serve the page on; another than this machine's "
@@ -99,6 +104,13 @@ COMMAND_WAIT = 10.0  # seconds the page waits for a command that needs no simula
 SERVICE_WAIT = 5.0  # seconds a command waits for its service to be discovered
 ANSWER_POLL = 0.2  # seconds between an HTTP thread's looks at whether the run is gone
 
+DEMONSTRATIONS, READY = publishes("demonstrations"), serves("teacher_ready")
+MOVEMENTS, STATUS = subscribes("movements"), subscribes("run_status")
+PACE_STATE = subscribes("pace_state")
+EXECUTE, PACE = calls("execute_action"), calls("pace")
+INTERFACES = declared(DEMONSTRATIONS, READY, MOVEMENTS, STATUS, PACE_STATE, EXECUTE, PACE,
+                      PICTURE_INTERFACES, WEB_EXPERT_INTERFACES)
+
 
 class WebTeacherNode(Node, Api):
     def __init__(self, **node_options: Any) -> None:
@@ -120,19 +132,15 @@ class WebTeacherNode(Node, Api):
         self._pending: list[tuple[Future, float, Any, ThreadFuture]] = []
         self._waiting: list[tuple[Any, ThreadFuture, float]] = []  # for their service
         self._later: list[tuple[float, PacePlan, Request, ThreadFuture]] = []  # pace calls
-        self._demos = self.create_publisher(Demonstration, "demonstrations", qos.RECORDS)
+        self._demos = DEMONSTRATIONS.create(self)
         follow(self, self.app.picture, self.app.lock)
         # The arbiter starts once these have matched (sgim_ros/ready.py).
-        serve_ready(self, "teacher_ready", {
-            "movements": self.create_subscription(Movement, "movements", self._on_movement,
-                                                  qos.RECORDS),
-            "run_status": self.create_subscription(RunStatus, "run_status", self._on_status,
-                                                   qos.RECORDS)})
-        self.create_subscription(PaceState, "pace_state", self._on_pace, qos.LATEST_STATE)
+        serve_ready(self, READY, {"movements": MOVEMENTS.create(self, self._on_movement),
+                                  "run_status": STATUS.create(self, self._on_status)})
+        PACE_STATE.create(self, self._on_pace)
         self.expert = WebExpert(self, self.app.say) if p["expert"] else None
         self.app.expert = WEB_EXPERT if p["expert"] else ""
-        self._execute = self.create_client(ExecuteAction, "execute_action")
-        self._pace = self.create_client(Pace, "pace")
+        self._execute, self._pace = EXECUTE.create(self), PACE.create(self)
         self._lake = lake_png()
         self.casts = CastRenderer(p["render_casts"], self.get_logger().warning)
         try:

@@ -28,8 +28,8 @@ def recorder_command(output: Path, **params) -> list[str]:
 
 def publishers(client) -> dict:
     """One publisher per recorded topic, with the graph's QoS."""
-    from sgim_nodes.bag.live_topics import ros_message_class, topic_qos
     from sgim_nodes.bag.types import TOPICS
+    from sgim_ros.interfaces import ros_message_class, topic_qos
 
     return {name: client.node.create_publisher(ros_message_class(t), f"/{name}", topic_qos(name))
             for name, t in TOPICS.items()}

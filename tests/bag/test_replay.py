@@ -27,8 +27,8 @@ def _replay(bag, *args) -> list[str]:
 
 
 def test_replay_at_a_high_rate_delivers_everything(ros_processes, client, tmp_path):
-    from sgim_nodes.bag.live_topics import ros_message_class, topic_qos
     from sgim_nodes.bag.types import TOPICS
+    from sgim_ros.interfaces import ros_message_class, topic_qos
 
     messages = samples.synthetic_run(120, seed=3)
     bag = samples.write_bag(tmp_path / "run", messages, chunk_messages=50)
@@ -132,7 +132,7 @@ def test_a_bag_of_an_older_version_replays_as_today_s_messages(ros_processes, cl
     """Movement before `attempt`, Demonstration before `content` and `help_request`, Region
     before `least_competent_goal`: the subscribers get well-formed messages of today's types,
     the recorded values, the new fields at their defaults."""
-    from sgim_nodes.bag.live_topics import ros_message_class, topic_qos
+    from sgim_ros.interfaces import ros_message_class, topic_qos
     from tests.bag import old_bags
 
     store = old_bags.store_with(old_bags.OLDER)
@@ -173,9 +173,9 @@ def test_the_fields_an_old_record_lacks_get_the_defaults_of_today_s_messages():
     for every recorded type: what an old record is given is what a fresh message holds."""
     from rclpy.serialization import deserialize_message
 
-    from sgim_nodes.bag.live_topics import ros_message_class
     from sgim_nodes.bag.schema import Upgrader
     from sgim_nodes.bag.types import RECORDED_TOPICS, typestore
+    from sgim_ros.interfaces import ros_message_class
 
     upgrader, store = Upgrader(), typestore()
     for msgtype in set(RECORDED_TOPICS.values()):

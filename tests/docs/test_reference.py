@@ -22,7 +22,7 @@ COUNTERPART = {"subscribes": "publishes", "publishes": "subscribes", "calls": "s
                "serves": "calls", "action client": "action server",
                "action server": "action client"}
 # Nodes whose constructors run here with their defaults (human_input wants a terminal and
-# web_teacher a port; their endpoints are read by the same scan).
+# web_teacher a port; their endpoints are declared alike).
 BUILT = ("sgim_nodes.nodes.recorder", "sim_bridge.sim_bridge_node", "sgim_nodes.nodes.evaluator",
          "sgim_nodes.nodes.markers", "sgim_nodes.nodes.interest_computer",
          "sgim_nodes.nodes.goal_generator", "sgim_nodes.nodes.low_level_explorer",
@@ -33,9 +33,8 @@ BUILT = ("sgim_nodes.nodes.recorder", "sim_bridge.sim_bridge_node", "sgim_nodes.
 @pytest.fixture(scope="module")
 def found():
     from sgim_nodes.graph.description import NODES
-    from sgim_nodes.graph.endpoints import endpoints
 
-    return {spec.name: endpoints(spec) for spec in NODES.values()}
+    return {spec.name: list(spec.interfaces) for spec in NODES.values()}
 
 
 def test_the_reference_page_is_what_the_code_declares():
@@ -50,9 +49,8 @@ def test_the_reference_page_is_what_the_code_declares():
 
 
 def test_the_recorder_records_every_topic_a_node_publishes(found):
-    """Two declarations of the topics, made apart: the publishers' calls and the recorder's
-    table (bag.types)."""
-    from sgim_nodes.bag.types import RECORDED_TOPICS
+    """The recorder subscribes to the topic table; the publishers declare their own."""
+    from sgim_ros.interfaces import RECORDED_TOPICS
 
     published = {(e.name.removeprefix("/"), e.type) for ends in found.values() for e in ends
                  if e.kind == "publishes"}
@@ -69,10 +67,10 @@ def test_every_endpoint_has_its_counterpart(found):
     assert not alone
 
 
-def test_built_nodes_create_what_the_scan_reads(found, ros_domain, tmp_path):
-    """The scan reads calls; here the constructors run (no spinning) and rclpy lists what they
-    made: everything the scan found unconditionally, nothing it did not find. Actions are not
-    listed by rclpy (the pairing test above covers their names)."""
+def test_built_nodes_create_what_they_declare(found, ros_domain, tmp_path):
+    """The constructors run (no spinning) and rclpy lists what they made: every endpoint the
+    node declares without a condition, nothing it does not declare. Actions are not listed by
+    rclpy (the pairing test above covers their names)."""
     from sgim_nodes.graph.description import NODES
 
     child = subprocess.run(
@@ -83,12 +81,32 @@ def test_built_nodes_create_what_the_scan_reads(found, ros_domain, tmp_path):
     live = json.loads(child.stdout.splitlines()[-1])
     by_module = {spec.params_module: spec.name for spec in NODES.values()}
     for module in BUILT:
-        scanned = [e for e in found[by_module[module]]
-                   if e.kind in ("publishes", "subscribes", "serves", "calls")]
+        declared = [e for e in found[by_module[module]]
+                    if e.kind in ("publishes", "subscribes", "serves", "calls")]
         made = {tuple(pair) for pair in live[module]}
-        sure = {(e.kind, e.name) for e in scanned if not (e.condition or e.note)}
+        sure = {(e.kind, e.name.lstrip("/")) for e in declared if not e.conditional}
         assert sure <= made, (module, sure - made)
-        assert made <= {(e.kind, e.name) for e in scanned}, (module, made)
+        assert made <= {(e.kind, e.name.lstrip("/")) for e in declared}, (module, made)
+
+
+def test_nodes_make_endpoints_only_from_their_declarations():
+    """No node module or helper calls rclpy's create_* itself: an endpoint made outside
+    Endpoint.create would be missing from the reference and from the checks above."""
+    import ast
+
+    creators = {"create_publisher", "create_subscription", "create_service", "create_client",
+                "ActionServer", "ActionClient"}
+    folders = [REPO / "sgim_nodes" / "sgim_nodes" / "nodes", REPO / "teacher" / "teacher",
+               REPO / "sim_bridge" / "sim_bridge"]
+    found = []
+    for path in (p for folder in folders for p in folder.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Call):
+                func = node.func
+                name = func.attr if isinstance(func, ast.Attribute) else getattr(func, "id", "")
+                if name in creators:
+                    found.append(f"{path.relative_to(REPO)}:{node.lineno} {name}")
+    assert not found
 
 
 def test_a_learner_parameter_is_described_by_its_config_docstring():
@@ -99,93 +117,69 @@ def test_a_learner_parameter_is_described_by_its_config_docstring():
     assert not undescribed
 
 
-FAKE_HELPERS = '''
-from rclpy.node import Node
-from sgim_msgs.srv import RecorderReady
-
-
-def serve(node: Node, service: str):
-    return node.create_service(RecorderReady, service, None)
-
-
-class Jobs:
-    def __init__(self, node, kind, name):
-        from rclpy.action import ActionServer
-
-        self.server = ActionServer(node, kind, name, execute_callback=None)
-'''
 FAKE_NODE = '''"""fake: a node for the reference's own tests.
 
 Not in any run."""
-from rclpy.node import Node
-from sgim_msgs.action import Imitate
-from sgim_msgs.msg import Movement
-from sgim_ros import qos
+from sgim_ros.interfaces import action_server, declared, publishes, serves, subscribes
 from sgim_ros.params import Param, positive
-from fakepkg.helpers import Jobs, serve
 
 PARAMS = (Param("speed", 1.0, "how fast it goes", positive, read_only=False),)
-
-
-class FakeNode(Node):
-    def __init__(self, asks: bool) -> None:
-        super().__init__("fake")
-        self.create_publisher(Movement, "moves", qos.RECORDS)
-        if asks:
-            self.create_subscription(Movement, "asks", print, qos.LATEST_STATE)
-        serve(self, "fake_ready")
-        Jobs(self, Imitate, "copy")
-'''
-FAKE_LOOP = '''
-from rclpy.node import Node
-from sgim_msgs.msg import Movement
-
-
-class LoopNode(Node):
-    def __init__(self) -> None:
-        super().__init__("loop")
-        for name in ("a", "b"):
-            self.create_publisher(Movement, name, 10)
+INTERFACES = declared(publishes("movements"), subscribes("region_map", "it asks"),
+                      serves("fake_ready"), action_server("imitate"))
 '''
 
 
 @pytest.fixture
 def fake_package(tmp_path, monkeypatch):
-    """A package `fakepkg` in the tree the scan reads, importable for its PARAMS."""
-    from sgim_nodes.graph import endpoints
+    """A package `fakepkg` in the tree the reference reads, importable for its PARAMS and
+    INTERFACES."""
+    from sgim_nodes.graph import reference
 
     package = tmp_path / "fakepkg"
     package.mkdir()
-    for name, text in (("__init__", ""), ("helpers", FAKE_HELPERS), ("node", FAKE_NODE),
-                       ("loop", FAKE_LOOP)):
-        (package / f"{name}.py").write_text(text)
-    monkeypatch.setitem(endpoints.SOURCES, "fakepkg", tmp_path)
+    (package / "__init__.py").write_text("")
+    (package / "node.py").write_text(FAKE_NODE)
+    monkeypatch.setitem(reference.SOURCES, "fakepkg", tmp_path)
     monkeypatch.syspath_prepend(str(tmp_path))
-    endpoints._module.cache_clear()
     yield package
-    endpoints._module.cache_clear()
     for name in [m for m in sys.modules if m.split(".")[0] == "fakepkg"]:
         del sys.modules[name]
 
 
-def test_the_scan_follows_helpers_and_keeps_the_nodes_conditions(fake_package):
-    from sgim_nodes.graph.description import NodeSpec
-    from sgim_nodes.graph.endpoints import Endpoint, endpoints
+def test_a_declaration_is_typed_by_the_tables_and_refused_when_unknown():
+    from sgim_ros.interfaces import (
+        Endpoint,
+        UnknownEndpoint,
+        action_client,
+        calls,
+        publishes,
+        subscribes,
+    )
 
-    assert endpoints(NodeSpec("fakepkg", "fake", "fakepkg.node")) == [
-        Endpoint("publishes", "moves", "sgim_msgs/msg/Movement", "RECORDS"),
-        Endpoint("subscribes", "asks", "sgim_msgs/msg/Movement", "LATEST_STATE", "asks"),
-        Endpoint("serves", "fake_ready", "sgim_msgs/srv/RecorderReady"),
-        Endpoint("action server", "copy", "sgim_msgs/action/Imitate"),
-    ]
+    assert publishes("markers/regions").qos == "LATEST_STATE"
+    assert subscribes("markers/regions", keep_all=True).qos == "LATEST_STATE, keep-all"
+    assert subscribes("/help_requests").type == "sgim_msgs/msg/HelpRequest"
+    assert calls("/centre/expert_ready").type == "sgim_msgs/srv/RecorderReady"
+    assert action_client("reach_goal").type == "sgim_msgs/action/ReachGoal"
+    with pytest.raises(UnknownEndpoint, match=r"'movement'.*no such topic"):
+        publishes("movement")
+    with pytest.raises(UnknownEndpoint, match="kind must be one of"):
+        Endpoint("listens", "movements")
 
 
-def test_a_name_computed_at_run_time_stops_the_scan(fake_package):
-    from sgim_nodes.graph.description import NodeSpec
-    from sgim_nodes.graph.endpoints import ComputedName, endpoints
+def test_a_node_made_under_another_name_is_refused():
+    from sgim_ros.interfaces import UnknownEndpoint, calls
 
-    with pytest.raises(ComputedName, match=r"loop\.py:10: .*endpoints\.DYNAMIC"):
-        endpoints(NodeSpec("fakepkg", "loop", "fakepkg.loop"))
+    with pytest.raises(UnknownEndpoint, match="not the declared calls 'expert_ready'"):
+        calls("expert_ready").create(object(), name="/centre/teacher_ready")
+
+
+def test_an_endpoint_declared_twice_is_listed_once():
+    from sgim_ros.interfaces import declared, publishes, subscribes
+
+    assert declared(subscribes("goals"), subscribes("goals", "an expert"),
+                    publishes("goals", "a"), (publishes("goals", "b"),)) == (
+        publishes("goals", "a or b"), subscribes("goals"))
 
 
 def test_a_page_of_one_node(fake_package):
@@ -197,9 +191,10 @@ def test_a_page_of_one_node(fake_package):
     assert "### fake\n\nfake: a node for the reference's own tests.\n" in page
     assert "- in the graph of: no run (started by hand)" in page
     assert "| `speed` | `1.0` | > 0 | no |  | how fast it goes |" in page
-    assert ("| subscribes | `asks` | [`sgim_msgs/msg/Movement`](#msgmovement) | LATEST_STATE "
-            "| `asks` |") in page
-    assert "| `moves` | [`sgim_msgs/msg/Movement`](#msgmovement) | RECORDS | fake |  |" in page
+    assert ("| subscribes | `region_map` | [`sgim_msgs/msg/RegionMap`](#msgregionmap) "
+            "| LATEST_STATE | it asks |") in page
+    assert ("| `movements` | [`sgim_msgs/msg/Movement`](#msgmovement) | RECORDS | fake |  |"
+            in page)
 
 
 def test_an_interface_file_becomes_its_prose_and_field_tables(tmp_path):

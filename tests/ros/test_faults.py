@@ -105,6 +105,7 @@ def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
     from sgim_msgs.msg import Demonstration, Movement, RunStatus, TeacherCheck
     from sgim_nodes.bag.resume import load_run_folder, segments
     from sgim_ros import qos
+    from sgim_ros.interfaces import serves
     from sgim_ros.ready import serve_ready
     from tests.ros.graph_client import GraphClient
 
@@ -113,7 +114,7 @@ def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
     # on teacher_checks (the arbiter waits for that publisher before movement 0).
     client = GraphClient(rclpy_context, "teacher")
     status: list = []
-    serve_ready(client.node, "teacher_ready", {
+    serve_ready(client.node, serves("teacher_ready"), {
         "run_status": client.node.create_subscription(RunStatus, "/run_status", status.append,
                                                       qos.RECORDS),
         "movements": client.node.create_subscription(Movement, "/movements", lambda _: None,

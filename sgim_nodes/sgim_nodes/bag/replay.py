@@ -143,7 +143,7 @@ def play(records: list[RawRecord], rate: float, wait_subscribers: float,
     from rclpy.duration import Duration
     from tqdm import tqdm
 
-    from sgim_nodes.bag.live_topics import ros_message_class, topic_qos
+    from sgim_ros.interfaces import ros_message_class, topic_qos
 
     rclpy.init(args=args)
     node = rclpy.create_node("replay")

@@ -1,4 +1,5 @@
-"""A rosbags typestore that knows every sgim_msgs message, and the topics a run records.
+"""A rosbags typestore that knows every sgim_msgs message, and the topics a run records
+(declared with the graph's other interfaces in sgim_ros/interfaces.py).
 
 Bags must carry their message definitions so that analysis needs no ROS install: rosbags
 embeds what its typestore knows, so every sgim_msgs type is registered here from the .msg
@@ -13,39 +14,18 @@ from functools import cache
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from sgim_ros.interfaces import (  # noqa: F401 - the run's topics, for the bag's readers
+    PACKAGE,
+    RECORDED_TOPICS,
+    STATE_TOPICS,
+    TOPICS,
+    VIEW_TOPICS,
+)
+
 if TYPE_CHECKING:  # rosbags is imported when a typestore is made (bag/reader.py says why)
     from rosbags.typesys.store import Typestore
 
-PACKAGE = "sgim_msgs"
 SOURCE_MSG_DIR = Path(__file__).resolve().parents[3] / PACKAGE / "msg"
-
-# Every topic of docs/reference.md, as rosbags type names. STATE_TOPICS keep only their
-# latest value (LATEST_STATE QoS); the others are records (RECORDS QoS).
-TOPICS: dict[str, str] = {
-    "movements": f"{PACKAGE}/msg/Movement",
-    "goals": f"{PACKAGE}/msg/Goal",
-    "competences": f"{PACKAGE}/msg/Competence",
-    "region_map": f"{PACKAGE}/msg/RegionMap",
-    "demonstrations": f"{PACKAGE}/msg/Demonstration",
-    "demonstrations_taken": f"{PACKAGE}/msg/Demonstration",
-    "help_requests": f"{PACKAGE}/msg/HelpRequest",
-    "teacher_checks": f"{PACKAGE}/msg/TeacherCheck",
-    "evaluations": f"{PACKAGE}/msg/Evaluation",
-    "run_status": f"{PACKAGE}/msg/RunStatus",
-}
-# What a run also records for viewers (Foxglove, rviz2): the arbiter's pace and the markers
-# node's live picture (docs/markers.md). They are not learner records: load_run ignores them.
-VIEW_TOPICS: dict[str, str] = {
-    "pace_state": f"{PACKAGE}/msg/PaceState",
-    "markers/landings": "visualization_msgs/msg/MarkerArray",
-    "markers/regions": "visualization_msgs/msg/MarkerArray",
-    "markers/teaching_goals": "visualization_msgs/msg/MarkerArray",
-    "markers/current_goal": "visualization_msgs/msg/MarkerArray",
-}
-RECORDED_TOPICS: dict[str, str] = {**TOPICS, **VIEW_TOPICS}
-# By last name component (names may be namespaced): the topics that hold a state, not records.
-STATE_TOPICS = frozenset({"region_map", "pace_state", "regions", "teaching_goals",
-                          "current_goal"})
 
 
 class MessageDefinitionsNotFound(FileNotFoundError):

@@ -8,7 +8,8 @@ and give each node `node_parameters()`: the values of the parameters it declares
 
 Every node module lists its parameters in a module-level PARAMS (sgim_ros.params.Param), so
 a run's parameters are checked here, before any node starts: unknown names and bad values are
-refused with one line each, naming them.
+refused with one line each, naming them. Beside them, its INTERFACES declare its topics,
+services and actions (sgim_ros/interfaces.py).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from sgim_nodes.bag.writer import STORAGES  # the recorder's bag formats, named 
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.learner_registry import SGIM_ACTS, is_learner, learner_kind, learner_names
 from sgim_nodes.core.social_config import SOCIAL_DEFAULTS
+from sgim_ros.interfaces import Endpoint
 from sgim_ros.params import Param, ParameterError
 
 LEARNER_CONFIG = Path(__file__).resolve().parents[2] / "config" / "learner.yaml"
@@ -67,6 +69,12 @@ class NodeSpec:
     @property
     def params(self) -> tuple[Param, ...]:
         return _params_of(self.params_module)
+
+    @property
+    def interfaces(self) -> tuple[Endpoint, ...]:
+        """What the node publishes, subscribes to, serves and calls: its module's INTERFACES
+        (sgim_ros/interfaces.py)."""
+        return tuple(importlib.import_module(self.params_module).INTERFACES)
 
 
 @cache

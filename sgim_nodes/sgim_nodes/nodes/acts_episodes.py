@@ -27,8 +27,8 @@ from sgim_msgs.msg import Competence, Demonstration, Goal, HelpRequest
 from sgim_msgs.srv import RegisterDemonstration
 from sgim_nodes.bag.record_checks import expert_source
 from sgim_nodes.core.teaching import GOAL_ONLY, MEANS_AND_GOAL
+from sgim_nodes.nodes.help_asks import HELP_REQUESTS
 from sgim_nodes.nodes.ros_glue import floats, vec
-from sgim_ros import qos
 
 MAX_REQUESTS_IN_A_ROW = 10_000  # core/acts_runner.MAX_REQUESTS_IN_A_ROW
 
@@ -43,7 +43,7 @@ class ActsEpisodes:
         self.in_a_row = 0  # requests since the last movement
         self.answers: dict[int, Demonstration] = {}
         self._asked: dict[int, tuple[str, int]] = {}  # index -> (teacher, movement)
-        self._out = arbiter.create_publisher(HelpRequest, "help_requests", qos.RECORDS)
+        self._out = HELP_REQUESTS.create(arbiter)
 
     def resume(self, records) -> None:
         """Requests go on numbering after the recorded ones."""

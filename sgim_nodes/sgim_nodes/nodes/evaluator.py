@@ -31,7 +31,7 @@ from sgim_nodes.bag.validation import LiveGate
 from sgim_nodes.core.evaluator import EVALUATION_SEED_OFFSET, Evaluator
 from sgim_nodes.core.inverse_model import InverseModel
 from sgim_nodes.core.learners import inverse_model_for, inverse_or_centre
-from sgim_nodes.nodes.movement_memory import MovementMemory
+from sgim_nodes.nodes.movement_memory import MOVEMENTS, MovementMemory
 from sgim_nodes.nodes.ros_glue import (
     declare_learner,
     floats,
@@ -40,7 +40,7 @@ from sgim_nodes.nodes.ros_glue import (
     vec,
     world_scale,
 )
-from sgim_ros import qos
+from sgim_ros.interfaces import declared, publishes, serves, subscribes
 from sgim_ros.params import Param, non_negative
 from sgim_ros.ready import serve_ready
 from sim_bridge.data_files import load_benchmark_goals
@@ -54,6 +54,10 @@ PARAMS = learner_node_params(
     Param("movements", 0, "the run's movement budget, evaluated at its end (0: take it from "
           "the run status)", non_negative),
 )
+
+EVALUATIONS, READY = publishes("evaluations"), serves("evaluator_ready")
+TAKEN, STATUS = subscribes("demonstrations_taken"), subscribes("run_status")
+INTERFACES = declared(EVALUATIONS, READY, TAKEN, STATUS, MOVEMENTS)
 
 
 class EvaluatorNode(Node):
@@ -87,15 +91,13 @@ class EvaluatorNode(Node):
                            if k not in self.done]
             self.done |= {0}
             self._point, self._config = point, config
-        self._out = self.create_publisher(Evaluation, "evaluations", qos.RECORDS)
+        self._out = EVALUATIONS.create(self)
         # The arbiter starts once these have matched (a missed movement would stall the
         # evaluations: sgim_ros/ready.py).
-        serve_ready(self, "evaluator_ready", {
+        serve_ready(self, READY, {
             "movements": self.memory.subscription,
-            "demonstrations_taken": self.create_subscription(
-                Demonstration, "demonstrations_taken", self._on_demo, qos.RECORDS),
-            "run_status": self.create_subscription(
-                RunStatus, "run_status", self._on_status, qos.RECORDS)})
+            "demonstrations_taken": TAKEN.create(self, self._on_demo),
+            "run_status": STATUS.create(self, self._on_status)})
         self.get_logger().info(f"{len(goals)} benchmark goals, every {self.every} movements")
 
     def _on_demo(self, msg: Demonstration) -> None:

@@ -51,8 +51,8 @@ from sgim_nodes.nodes.ros_glue import (
     vec,
     world_scale,
 )
-from sgim_ros import qos
 from sgim_ros.entry import first_of
+from sgim_ros.interfaces import declared, publishes, serves, subscribes
 from sgim_ros.params import Param, ParameterError, positive
 from sgim_ros.ready import serve_ready
 
@@ -78,6 +78,10 @@ def acts_choice(config, scale, teachers: str):
     return regions, StrategyChooser(regions, strategies,
                                     (config.p_mode1, config.p_mode2, config.p_mode3),
                                     config.distances(scale).mode3_radius)
+
+GOALS, COMPETENCES = publishes("goals"), subscribes("competences")
+READY, CHOOSE = serves("goal_generator_ready"), serves("choose_goal")
+INTERFACES = declared(GOALS, COMPETENCES, READY, CHOOSE)
 
 
 class GoalGenerator(AsyncNode):
@@ -110,12 +114,11 @@ class GoalGenerator(AsyncNode):
         self._waiters: list[tuple[int, Future]] = []
         self.gate = LiveGate(self.get_logger().error,
                              Limits(values["action_size"], values["outcome_size"]))
-        self._goals = self.create_publisher(Goal, "goals", qos.RECORDS)
-        competences = self.create_subscription(Competence, "competences", self._on_competence,
-                                               qos.RECORDS)
+        self._goals = GOALS.create(self)
+        competences = COMPETENCES.create(self, self._on_competence)
         # A competence missed before the DDS match would stall every later goal.
-        serve_ready(self, "goal_generator_ready", {"competences": competences})
-        self.create_service(ChooseGoal, "choose_goal", self._choose)
+        serve_ready(self, READY, {"competences": competences})
+        CHOOSE.create(self, self._choose)
 
     def _on_competence(self, msg: Competence) -> None:
         if self.gate.check("competences", msg):  # the readers' checks: logged, not folded

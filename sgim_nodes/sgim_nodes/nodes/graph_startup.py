@@ -17,12 +17,30 @@ from rclpy.node import Node
 from rclpy.task import Future
 
 from sgim_msgs.srv import RecorderReady
-from sgim_nodes.bag.types import RECORDED_TOPICS
 from sgim_nodes.core.learner_registry import learner_kind
 from sgim_ros.entry import first_of
+from sgim_ros.interfaces import RECORDED_TOPICS, Endpoint, calls
 
 POLL_SECONDS = 0.1
 READY_CALL_SECONDS = 5.0  # one ready call; a request lost in discovery is asked again
+
+
+def _ready(service: str, node: str) -> Endpoint:
+    return calls(service, f"the run has {node}")
+
+
+# The `*_ready` service of each node that listens to the run's records, as the arbiter calls it.
+RECORDER_READY = _ready("recorder_ready", "the recorder node (or set wait_for_recorder to false)")
+EVALUATOR_READY = _ready("evaluator_ready", "the evaluator node")
+EXPLORER_READY = _ready("explorer_ready", "the low_level_explorer node")
+GOAL_GENERATOR_READY = _ready("goal_generator_ready", "the goal_generator node")
+IMITATION_READY = _ready("imitation_ready", "the imitation node")
+TEACHER_READY = _ready("teacher_ready", "the teacher node")
+EXPERT_READY = calls("expert_ready", "sgim-acts: in the namespace of each of its teachers "
+                     "(/NAME/expert_ready)")
+WEB_EXPERT_READY = calls("web/expert_ready", "sgim-acts with the web page among its teachers")
+READY_CALLS = (RECORDER_READY, EVALUATOR_READY, EXPLORER_READY, GOAL_GENERATOR_READY,
+               IMITATION_READY, TEACHER_READY, EXPERT_READY, WEB_EXPERT_READY)
 
 
 class RunAborted(RuntimeError):
@@ -35,7 +53,8 @@ class ExpectedGraph:
 
     servers: list[tuple[object, str]] = field(default_factory=list)  # (client, name)
     publishers: list[str] = field(default_factory=list)  # topics someone must publish
-    listeners: list[tuple[str, str]] = field(default_factory=list)  # (ready service, who)
+    # (declared ready call, the service's name, who serves it)
+    listeners: list[tuple[Endpoint, str, str]] = field(default_factory=list)
 
 
 def arbiter_graph(learner: str, social: bool, automatic: bool, wait_for_recorder: bool,
@@ -63,18 +82,18 @@ def arbiter_graph(learner: str, social: bool, automatic: bool, wait_for_recorder
                                                        (automatic, "teacher_checks"),
                                                        (bool(teachers), "demonstrations"))
                            if needed]
-    wanted = [
-        (wait_for_recorder, "recorder_ready",
-         "the recorder node (or set wait_for_recorder to false)"),
-        (wait_for_evaluation, "evaluator_ready", "the evaluator node"),
-        (kind.goal_babbling, "explorer_ready", "the low_level_explorer node"),
-        (kind.goal_babbling, "goal_generator_ready", "the goal_generator node"),
-        (imitating, "imitation_ready", "the imitation node"),
-        (automatic, "teacher_ready", "the teacher node"),
-        *((True, f"/{name}/expert_ready", f"the expert node of teacher {name} (ros2 run "
-           f"teacher expert --ros-args -r __ns:=/{name})") for name in teachers),
-    ]
-    expected.listeners = [(service, who) for needed, service, who in wanted if needed]
+    wanted = [(needed, ready, ready.name, ready.when.removeprefix("the run has "))
+              for needed, ready in ((wait_for_recorder, RECORDER_READY),
+                                    (wait_for_evaluation, EVALUATOR_READY),
+                                    (kind.goal_babbling, EXPLORER_READY),
+                                    (kind.goal_babbling, GOAL_GENERATOR_READY),
+                                    (imitating, IMITATION_READY), (automatic, TEACHER_READY))]
+    wanted += [(True, WEB_EXPERT_READY if f"{name}/expert_ready" == WEB_EXPERT_READY.name
+                else EXPERT_READY, f"/{name}/expert_ready", f"the expert node of teacher "
+                f"{name} (ros2 run teacher expert --ros-args -r __ns:=/{name})")
+               for name in teachers]
+    expected.listeners = [(ready, service, who) for needed, ready, service, who in wanted
+                          if needed]
     return expected
 
 
@@ -112,15 +131,15 @@ async def wait_for_graph(node: Node, expected: ExpectedGraph, timeout: float,
                 raise RunAborted(f"nobody publishes '{topic}' after {timeout:g} s: is its "
                                  "node (evaluator or teacher) up?")
             await _sleep(node, POLL_SECONDS)
-    for service, who in expected.listeners:
-        await _wait_until_listening(node, service, who, deadline, timeout)
+    for ready, service, who in expected.listeners:
+        await _wait_until_listening(node, ready, service, who, deadline, timeout)
     await _sleep(node, settle_time)
 
 
-async def _wait_until_listening(node: Node, service: str, who: str, deadline: float,
-                                timeout: float) -> None:
+async def _wait_until_listening(node: Node, declared: Endpoint, service: str, who: str,
+                                deadline: float, timeout: float) -> None:
     """Ask `service` until it says its node has matched every publisher we see."""
-    ready = node.create_client(RecorderReady, service)
+    ready = declared.create(node, name=service)
     name = service.removesuffix("_ready")
     why = f"no {service} service: is {who} up?"
     while time.monotonic() < deadline:

@@ -18,7 +18,10 @@ from rclpy.node import Node
 from sgim_msgs.msg import Demonstration, HelpRequest
 from sgim_nodes.core.schedule import Schedule
 from sgim_nodes.nodes.ros_glue import floats
-from sgim_ros import qos
+from sgim_ros.interfaces import publishes
+
+HELP_REQUESTS = publishes("help_requests", "the learner asks for help: on request, or "
+                          "sgim-acts")
 
 
 class HelpAsks:
@@ -30,7 +33,7 @@ class HelpAsks:
         self.answers: dict[int, Demonstration] = {}  # answers not yet taken
         self._answered: set[int] = set()
         self._asked_at: dict[int, int] = {}  # ask index -> the count it was made at
-        self._out = node.create_publisher(HelpRequest, "help_requests", qos.RECORDS)
+        self._out = HELP_REQUESTS.create(node)
 
     def resume(self, records, count: int) -> None:
         """Asks already made and the window since the last one, from a run's records (the

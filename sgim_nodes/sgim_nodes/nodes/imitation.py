@@ -38,11 +38,14 @@ from sgim_nodes.nodes.ros_glue import (
     run_node,
     vec,
 )
-from sgim_nodes.nodes.sim_client import SIM_CLIENT_PARAMS, SimClient
-from sgim_ros import qos
+from sgim_nodes.nodes.sim_client import EXECUTE, SIM_CLIENT_PARAMS, SimClient
+from sgim_ros.interfaces import action_server, declared, serves, subscribes
 from sgim_ros.ready import serve_ready
 
 PARAMS = learner_node_params(*SIM_CLIENT_PARAMS)
+MOVEMENTS, READY, IMITATE = (subscribes("movements"), serves("imitation_ready"),
+                              action_server("imitate"))
+INTERFACES = declared(MOVEMENTS, READY, IMITATE, EXECUTE)
 
 
 class ImitationNode(AsyncNode):
@@ -58,10 +61,9 @@ class ImitationNode(AsyncNode):
         if values["resume_from"]:
             self.gate.movements.count = resume_point(
                 values["resume_from"], self.config, values["resume_segments"]).count
-        serve_ready(self, "imitation_ready", {"movements": self.create_subscription(
-            Movement, "movements", self.gate.admit_movement, qos.RECORDS)})
+        serve_ready(self, READY, {"movements": MOVEMENTS.create(self, self.gate.admit_movement)})
         self.sim = SimClient(self, values)
-        self.jobs = JobServer(self, Imitate, "imitate", self._run)
+        self.jobs = JobServer(self, IMITATE, self._run)
 
     async def _run(self, handle) -> Imitate.Result:
         request: Imitate.Goal = handle.request

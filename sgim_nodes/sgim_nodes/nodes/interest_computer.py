@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from rclpy.node import Node
 
-from sgim_msgs.msg import Competence, RegionMap
+from sgim_msgs.msg import Competence
 from sgim_nodes.bag.record_checks import Limits
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.bag.validation import LiveGate
@@ -30,9 +30,12 @@ from sgim_nodes.nodes.ros_glue import (
     vec,
     world_scale,
 )
-from sgim_ros import qos
+from sgim_ros.interfaces import declared, publishes, subscribes
 
 PARAMS = learner_node_params()
+
+REGION_MAP, COMPETENCES = publishes("region_map"), subscribes("competences")
+INTERFACES = declared(REGION_MAP, COMPETENCES)
 
 
 class InterestComputer(Node):
@@ -47,8 +50,8 @@ class InterestComputer(Node):
         self.regions = LiveRegions(tree, folded)
         self.gate = LiveGate(self.get_logger().error,
                              Limits(values["action_size"], self.outcome_size))
-        self._map = self.create_publisher(RegionMap, "region_map", qos.LATEST_STATE)
-        self.create_subscription(Competence, "competences", self._on_competence, qos.RECORDS)
+        self._map = REGION_MAP.create(self)
+        COMPETENCES.create(self, self._on_competence)
         self._publish(0)
 
     def _on_competence(self, msg: Competence) -> None:

@@ -48,7 +48,7 @@ from sgim_nodes.core.environment import MovementResult
 from sgim_nodes.core.goal_reaching import GoalAttempt, probe_scale_for
 from sgim_nodes.core.random_streams import component_rng
 from sgim_nodes.nodes.graph_startup import call_bounded
-from sgim_nodes.nodes.movement_memory import MovementMemory
+from sgim_nodes.nodes.movement_memory import MOVEMENTS, MovementMemory
 from sgim_nodes.nodes.ros_glue import (
     ACTS,
     PROCESS_CODES,
@@ -62,8 +62,8 @@ from sgim_nodes.nodes.ros_glue import (
     vec,
     world_scale,
 )
-from sgim_nodes.nodes.sim_client import SIM_CLIENT_PARAMS, SimClient
-from sgim_ros import qos
+from sgim_nodes.nodes.sim_client import EXECUTE, SIM_CLIENT_PARAMS, SimClient
+from sgim_ros.interfaces import action_server, calls, declared, publishes, serves
 from sgim_ros.params import Param, positive
 from sgim_ros.ready import serve_ready
 
@@ -73,6 +73,11 @@ PARAMS = learner_node_params(
           "choose_goal (it waits for the competences of the goals attempted before)", positive,
           read_only=False),
 )
+
+COMPETENCES, CHOOSE = publishes("competences"), calls("choose_goal")
+READY, REGISTER = serves("explorer_ready"), serves("register_demonstration")
+REACH = action_server("reach_goal")
+INTERFACES = declared(COMPETENCES, CHOOSE, READY, REGISTER, REACH, MOVEMENTS, EXECUTE)
 
 
 class JobRefused(ValueError):
@@ -95,15 +100,15 @@ class LowLevelExplorer(AsyncNode):
             self.memory.resume(resume_point(values["resume_from"], self.config,
                                  values["resume_segments"]))
         self.goal_timeout = values["goal_timeout"]
-        self.goal_client = self.create_client(ChooseGoal, "choose_goal")
+        self.goal_client = CHOOSE.create(self)
         # A missed movement would stall every reach job that waits for it, and the first job
         # must find the goal generator (sgim_ros/ready.py).
-        serve_ready(self, "explorer_ready", {"movements": self.memory.subscription},
+        serve_ready(self, READY, {"movements": self.memory.subscription},
                     servers={"choose_goal": self.goal_client})
         self.sim = SimClient(self, values)
-        self._competences = self.create_publisher(Competence, "competences", qos.RECORDS)
-        self.create_service(RegisterDemonstration, "register_demonstration", self._register)
-        self.jobs = JobServer(self, ReachGoal, "reach_goal", self._attempt)
+        self._competences = COMPETENCES.create(self)
+        REGISTER.create(self, self._register)
+        self.jobs = JobServer(self, REACH, self._attempt)
 
     def _register(self, request: RegisterDemonstration.Request,
                   response: RegisterDemonstration.Response):

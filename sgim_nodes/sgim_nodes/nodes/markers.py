@@ -21,11 +21,16 @@ from rclpy.node import Node
 from visualization_msgs.msg import MarkerArray
 
 from sgim_nodes.core.teaching import Teacher
-from sgim_nodes.nodes.picture_feed import REACH_PARAMS, follow, reach_tolerance
+from sgim_nodes.nodes.picture_feed import (
+    PICTURE_INTERFACES,
+    REACH_PARAMS,
+    follow,
+    reach_tolerance,
+)
 from sgim_nodes.view import markers
 from sgim_nodes.view.picture import LivePicture
-from sgim_ros import qos
 from sgim_ros.entry import run_node
+from sgim_ros.interfaces import declared, publishes
 from sgim_ros.params import Param, declare, positive
 from sim_bridge.data_files import load_teaching_set
 from sim_bridge.data_params import TEACHING_SET_FILE
@@ -40,6 +45,11 @@ PARAMS = (
           TEACHING_SET_FILE),
 )
 
+# The picture's layers (docs/markers.md), each its own topic.
+LAYERS = tuple(publishes(f"markers/{layer}")
+               for layer in ("landings", "regions", "teaching_goals", "current_goal"))
+INTERFACES = declared(*LAYERS, PICTURE_INTERFACES)
+
 
 class MarkersNode(Node):
     def __init__(self) -> None:
@@ -51,12 +61,8 @@ class MarkersNode(Node):
         self.picture = LivePicture(teacher)
         follow(self, self.picture)
         self.full_every = p["full_every"]
-        self._landings = self.create_publisher(MarkerArray, "markers/landings", qos.RECORDS)
-        self._regions = self.create_publisher(MarkerArray, "markers/regions", qos.LATEST_STATE)
-        self._teaching = self.create_publisher(MarkerArray, "markers/teaching_goals",
-                                               qos.LATEST_STATE)
-        self._goal = self.create_publisher(MarkerArray, "markers/current_goal",
-                                           qos.LATEST_STATE)
+        self._landings, self._regions, self._teaching, self._goal = (
+            layer.create(self) for layer in LAYERS)
         self._sent = {"landings": 0, "regions": -1, "teaching": -1, "goal": -1}
         self._batch = 0
         self._last_full = -float("inf")

@@ -26,7 +26,9 @@ from sgim_nodes.core.learners import DEMONSTRATION, build_memory
 from sgim_nodes.core.memory import Memory
 from sgim_nodes.core.scale import WorldScale
 from sgim_nodes.nodes.ros_glue import PROCESS_LABELS, check_vector, vec
-from sgim_ros import qos
+from sgim_ros.interfaces import subscribes
+
+MOVEMENTS = subscribes("movements")  # in the INTERFACES of each node that keeps a memory
 
 
 class MovementMemory:
@@ -47,8 +49,7 @@ class MovementMemory:
         self._latest_row: int | None = None  # memory row of movement `count`, if stored
         self._deferred: list[tuple[int, np.ndarray, np.ndarray]] = []
         self._waiters: list[tuple[int, Future]] = []
-        self.subscription = node.create_subscription(Movement, "movements", self._on_movement,
-                                                     qos.RECORDS)
+        self.subscription = MOVEMENTS.create(node, self._on_movement)
 
     def _on_movement(self, msg: Movement) -> None:
         verdict = self.gate.admit_movement(msg)

@@ -31,10 +31,14 @@ from rclpy.task import Future
 
 from sgim_msgs.msg import PaceState
 from sgim_msgs.srv import Pace
-from sgim_ros import qos
 from sgim_ros.entry import first_of
+from sgim_ros.interfaces import publishes, serves
 
 FOREVER = -1.0  # wait_for_teacher: wait until the teacher acts
+
+
+HUMAN_TURNS = "a social run whose teacher is a person (human, web or external)"
+PACE_INTERFACES = (publishes("pace_state", HUMAN_TURNS), serves("pace", HUMAN_TURNS))
 
 
 class PaceControl:
@@ -57,8 +61,9 @@ class PaceControl:
         self.turn_deadline = math.inf
         self.message = ""
         self._changes: list[Future] = []
-        self._publisher = node.create_publisher(PaceState, "pace_state", qos.LATEST_STATE)
-        node.create_service(Pace, "pace", self._serve)
+        state, service = PACE_INTERFACES
+        self._publisher = state.create(node)
+        service.create(node, self._serve)
         self.publish("ready")
 
     # --- the arbiter's side ------------------------------------------------------------

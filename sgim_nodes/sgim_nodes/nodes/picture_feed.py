@@ -22,7 +22,7 @@ from sgim_msgs.msg import (
 )
 from sgim_nodes.core.teaching import DEFAULT_TOLERANCE_NOISE, MEANS_AND_GOAL
 from sgim_nodes.view.picture import DemonstrationSeen, Leaf, LivePicture
-from sgim_ros import qos
+from sgim_ros.interfaces import subscribes
 from sgim_ros.params import Param, non_negative, positive
 from sim_bridge.scaling import OUTCOME_NOISE
 
@@ -42,6 +42,10 @@ def reach_tolerance(values: dict) -> float:
     """The distance under which a teaching goal counts as reached, from REACH_PARAMS."""
     return float(values["tolerance_noise"] * values["outcome_noise"])
 
+# What the picture shows, in the INTERFACES of each node that follows it.
+PICTURE_TOPICS = ("movements", "region_map", "goals", "evaluations", "demonstrations",
+                  "run_status")
+PICTURE_INTERFACES = tuple(subscribes(topic) for topic in PICTURE_TOPICS)
 RUN_STATES = {RunStatus.STATE_RUNNING: "running", RunStatus.STATE_FINISHED: "finished",
               RunStatus.STATE_ABORTED: "aborted"}
 
@@ -84,9 +88,6 @@ def follow(node: Node, picture: LivePicture, lock: threading.Lock | None = None)
             picture.set_status(msg.learner, msg.movement_index, msg.total_movements,
                                RUN_STATES.get(msg.state, "running"), msg.message)
 
-    node.create_subscription(Movement, "movements", on_movement, qos.RECORDS)
-    node.create_subscription(RegionMap, "region_map", on_regions, qos.LATEST_STATE)
-    node.create_subscription(Goal, "goals", on_goal, qos.RECORDS)
-    node.create_subscription(Evaluation, "evaluations", on_evaluation, qos.RECORDS)
-    node.create_subscription(Demonstration, "demonstrations", on_demonstration, qos.RECORDS)
-    node.create_subscription(RunStatus, "run_status", on_status, qos.RECORDS)
+    callbacks = (on_movement, on_regions, on_goal, on_evaluation, on_demonstration, on_status)
+    for endpoint, callback in zip(PICTURE_INTERFACES, callbacks, strict=True):
+        endpoint.create(node, callback)

@@ -41,13 +41,13 @@ from rclpy.node import Node
 from rclpy.serialization import deserialize_message
 
 from sgim_msgs.msg import RunStatus
-from sgim_nodes.bag.live_topics import ros_message_class, topic_qos
 from sgim_nodes.bag.record_checks import LIMITS_KEY, Limits, teaching_set_size
 from sgim_nodes.bag.run_folder import QUARANTINE_SUFFIX
 from sgim_nodes.bag.types import RECORDED_TOPICS, TOPICS
 from sgim_nodes.bag.validation import RunValidator
 from sgim_nodes.bag.writer import STORAGES, BagWriteError, BagWriter
 from sgim_ros.entry import run_node
+from sgim_ros.interfaces import declared, serves, subscribes
 from sgim_ros.params import Param, at_least, declare, non_negative, one_of, positive
 from sgim_ros.ready import serve_ready
 from sim_bridge.data_params import TEACHING_SET_FILE
@@ -108,6 +108,12 @@ def quarantine_file(output: str | Path) -> Path:
     output = Path(output)
     return output.with_name(output.name + QUARANTINE_SUFFIX)
 
+# Every topic of the run (sgim_ros/interfaces.py), state topics kept whole: a bag holds each
+# region map and pace state, not only the latest.
+RECORDED = tuple(subscribes(name, keep_all=True) for name in RECORDED_TOPICS)
+READY = serves("recorder_ready")
+INTERFACES = declared(RECORDED, READY)
+
 
 class RecorderNode(Node):
     def __init__(self) -> None:
@@ -137,19 +143,17 @@ class RecorderNode(Node):
         self._names: dict[str, str] = {}
         self._classes: dict[str, type] = {}
         self._record_subs: dict[str, object] = {}
-        for name, msgtype in RECORDED_TOPICS.items():
-            self._classes[name] = ros_message_class(msgtype)
-            sub = self._record_subs[name] = self.create_subscription(
-                self._classes[name], name,
-                lambda raw, topic=name: self._on_message(topic, raw),
-                topic_qos(name, keep_all=True), raw=True,
-            )
+        for topic in RECORDED:
+            name = topic.name
+            self._classes[name] = topic.interface()
+            sub = self._record_subs[name] = topic.create(
+                self, lambda raw, topic=name: self._on_message(topic, raw), raw=True)
             self._names[name] = sub.topic_name  # resolved: the namespace is recorded too
-            self.bag.add_topic(sub.topic_name, msgtype)
+            self.bag.add_topic(sub.topic_name, topic.type)
             self.counts[name] = 0
         self.create_timer(min(0.25, p["chunk_seconds"] / 4), self._tick)
         # Matched, not merely discovered: only a matched publisher's messages reach the bag.
-        serve_ready(self, "recorder_ready", self._record_subs)
+        serve_ready(self, READY, self._record_subs)
         self._write_quarantine()
         self.get_logger().info(
             f"recording {len(RECORDED_TOPICS)} topics into {self.bag.file} ({p['storage']}, "

@@ -10,7 +10,7 @@ from dataclasses import fields
 from typing import Any
 
 import numpy as np
-from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.action import CancelResponse, GoalResponse
 from rclpy.node import Node
 
 from sgim_msgs.msg import Region, RegionMap
@@ -59,13 +59,14 @@ class JobServer:
     result (`cancelled`). A job that refuses its request aborts the goal itself.
     """
 
-    def __init__(self, node: Node, action_type: type, name: str,
-                 job: Callable[[Any], Awaitable[Any]]) -> None:
+    def __init__(self, node: Node, endpoint: Any, job: Callable[[Any], Awaitable[Any]]
+                 ) -> None:
+        """`endpoint`: the node's declared action server (nodes/interfaces.py)."""
         self.job = job
-        self.node, self.name, self.action_type = node, name, action_type
+        self.node, self.name, self.action_type = node, endpoint.name, endpoint.interface()
         self.busy = False
-        self._server = ActionServer(
-            node, action_type, name, execute_callback=self._execute,
+        self._server = endpoint.create(
+            node, self._execute,
             goal_callback=lambda _: GoalResponse.REJECT if self.busy else GoalResponse.ACCEPT,
             cancel_callback=lambda _: CancelResponse.ACCEPT, result_timeout=JOB_RESULT_SECONDS)
 

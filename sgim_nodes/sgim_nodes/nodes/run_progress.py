@@ -14,7 +14,9 @@ from collections.abc import Callable
 from rclpy.node import Node
 
 from sgim_msgs.msg import RunStatus
-from sgim_ros import qos
+from sgim_ros.interfaces import publishes
+
+RUN_STATUS = publishes("run_status")  # in the arbiter's INTERFACES
 
 
 class RunProgress:
@@ -24,7 +26,7 @@ class RunProgress:
                  count: Callable[[], int]) -> None:
         self.node, self.learner, self.seed, self.total = node, learner, seed, total
         self.count = count
-        self.publisher = node.create_publisher(RunStatus, "run_status", qos.RECORDS)
+        self.publisher = RUN_STATUS.create(node)
         self.started = time.monotonic()
         self._last_said = 0
 

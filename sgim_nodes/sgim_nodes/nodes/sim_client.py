@@ -30,6 +30,7 @@ from rclpy.task import Future
 from sgim_msgs.msg import Movement
 from sgim_msgs.srv import ExecuteAction
 from sgim_ros.entry import first_of
+from sgim_ros.interfaces import calls
 from sgim_ros.params import Param, at_least, positive
 
 # The parameters of every node that calls the simulator; both may change while it runs.
@@ -40,6 +41,7 @@ SERVICE_RETRIES = Param("service_retries", 3, "tries of one movement after the f
                         "got no answer; then the node gives up and the run stops, naming the "
                         "movement", at_least(0), read_only=False)
 SIM_CLIENT_PARAMS = (SERVICE_TIMEOUT, SERVICE_RETRIES)
+EXECUTE = calls("execute_action")  # the simulator's service, in the nodes' INTERFACES
 
 
 class SimulatorError(RuntimeError):
@@ -57,7 +59,7 @@ class SimClient:
     def __init__(self, node: Node, settings: Mapping[str, Any]) -> None:
         self.node = node
         self.settings = settings
-        self.client = node.create_client(ExecuteAction, "execute_action")
+        self.client = EXECUTE.create(node)
         self.retries = 0  # over the node's life, for its log
 
     @property

@@ -39,13 +39,7 @@ budget is spent is refused, logged and announced on run_status (it stays in the 
 demonstration the learner takes is republished on `demonstrations_taken` with the count at
 which it entered the learner's memory: the evaluator and the bag readers use those only.
 
-Interfaces:
-  subscribes  demonstrations (Demonstration), evaluations (Evaluation)
-  publishes   competences (Competence, for demonstrated goals), run_status (RunStatus),
-              demonstrations_taken (Demonstration), pace_state (PaceState; human teacher only),
-              help_requests (HelpRequest; timing on-request only)
-  serves      pace (Pace; human teacher only)
-  clients of  register_demonstration, execute_action; actions reach_goal, imitate
+Its topics, services and actions: INTERFACES below (and docs/reference.md).
 Parameters: the common ones, every LearnerConfig field, movements, teacher,
 demonstration_period, timing, wait_for_teacher, wait_for_evaluation, wait_for_recorder,
 goals_per_job, timeouts.
@@ -74,14 +68,15 @@ from sgim_nodes.nodes.arbiter_jobs import JobSlot, Waits
 from sgim_nodes.nodes.arbiter_params import PARAMS
 from sgim_nodes.nodes.demonstration_inbox import DemonstrationInbox, shown
 from sgim_nodes.nodes.graph_startup import (
+    READY_CALLS,
     ExpectedGraph,
     RunAborted,
     arbiter_graph,
     call_bounded,
     wait_for_graph,
 )
-from sgim_nodes.nodes.help_asks import HelpAsks
-from sgim_nodes.nodes.pace import PaceControl
+from sgim_nodes.nodes.help_asks import HELP_REQUESTS, HelpAsks
+from sgim_nodes.nodes.pace import PACE_INTERFACES, PaceControl
 from sgim_nodes.nodes.ros_glue import (
     AsyncNode,
     declare_learner,
@@ -91,10 +86,17 @@ from sgim_nodes.nodes.ros_glue import (
     vec,
     world_scale,
 )
-from sgim_nodes.nodes.run_progress import RunProgress
-from sgim_nodes.nodes.sim_client import SimClient, SimulatorError
-from sgim_ros import qos
+from sgim_nodes.nodes.run_progress import RUN_STATUS, RunProgress
+from sgim_nodes.nodes.sim_client import EXECUTE, SimClient, SimulatorError
+from sgim_ros.interfaces import action_client, calls, declared, publishes, subscribes
 from sgim_ros.params import ParameterError
+
+REGISTER, TAKEN = calls("register_demonstration"), publishes("demonstrations_taken")
+REACH, IMITATE = action_client("reach_goal"), action_client("imitate")
+COMPETENCES = publishes("competences")  # of demonstrated goals, and of hosted learners'
+DEMONSTRATIONS, EVALUATIONS = subscribes("demonstrations"), subscribes("evaluations")
+INTERFACES = declared(REGISTER, TAKEN, REACH, IMITATE, COMPETENCES, DEMONSTRATIONS, EVALUATIONS,
+                      EXECUTE, RUN_STATUS, HELP_REQUESTS, PACE_INTERFACES, READY_CALLS)
 
 
 class SocialInteraction(AsyncNode):
@@ -145,19 +147,17 @@ class SocialInteraction(AsyncNode):
                                     values["wait_for_teacher"], self._preempt_goal)
         self.episodes = ActsEpisodes(self) if self.acts else None
         self.sim = SimClient(self, values)
-        self.register_client = self.create_client(RegisterDemonstration,
-                                                  "register_demonstration")
-        self.reach = ActionClient(self, ReachGoal, "reach_goal")
-        self.imitate = ActionClient(self, Imitate, "imitate")
-        self._taken = self.create_publisher(Demonstration, "demonstrations_taken", qos.RECORDS)
+        self.register_client = REGISTER.create(self)
+        self.reach, self.imitate = REACH.create(self), IMITATE.create(self)
+        self._taken = TAKEN.create(self)
         self.gate = LiveGate(self.get_logger().error, Limits(
             values["action_size"], values["outcome_size"], budget=self.total,
             teaching_set_size=teaching_set_size(values["teaching_set"] or None)))
         self.inbox = DemonstrationInbox(self.gate, self.total, self.automatic, self.asks,
                                         self.say_refusal)
-        self._competences = self.create_publisher(Competence, "competences", qos.RECORDS)
-        self.create_subscription(Demonstration, "demonstrations", self._on_demo, qos.RECORDS)
-        self.create_subscription(Evaluation, "evaluations", self._on_evaluation, qos.RECORDS)
+        self._competences = COMPETENCES.create(self)
+        DEMONSTRATIONS.create(self, self._on_demo)
+        EVALUATIONS.create(self, self._on_evaluation)
         if values["resume_from"]:
             self._resume(resume_point(values["resume_from"], self.config,
                                  values["resume_segments"]))
