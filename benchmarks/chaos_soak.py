@@ -103,9 +103,10 @@ def progress(run_dir: Path) -> int:
 
 
 def run_argv(seed: int, runs: Path, domain: int) -> list[str]:
-    return [RUN, SGIM_D, "--seed", str(seed), "--movements", str(MOVEMENTS), "--period",
-            str(PERIOD), "--eval-every", str(EVAL_EVERY), "--runs-dir", str(runs), "--name",
-            f"soak{seed}", "--domain", str(domain), "--quiet", "--timeout", "600"]
+    return [RUN, SGIM_D, "--seed", str(seed), "--movements", str(MOVEMENTS),
+            "--demonstration-period", str(PERIOD), "--eval-every", str(EVAL_EVERY), "--runs-dir",
+            str(runs), "--name", f"soak{seed}", "--domain", str(domain), "--quiet", "--timeout",
+            "600"]
 
 
 class Rogue(threading.Thread):

@@ -29,7 +29,8 @@ ARGUMENTS = (
     ("seed", "0", "seed of the run"),
     ("movements", "5000", "movement budget (the paper's: 5000)"),
     ("eval_every", "250", "movements between evaluations"),
-    ("period", str(SOCIAL_DEFAULTS.demonstration_period), "movements between demonstrations"),
+    ("demonstration_period", str(SOCIAL_DEFAULTS.demonstration_period),
+     "movements between demonstrations"),
     ("teacher", "automatic", "automatic, human, web or external (see run_experiment.sh "
      "--help)"),
     ("wait_for_teacher", "0", "human or web teacher: seconds to wait at each turn (-1: until "
@@ -79,9 +80,9 @@ def node_arguments(arguments: Mapping[str, str]) -> list[tuple[str, dict[str, An
                              f"{arguments['wait_for_teacher']!r} must be seconds") from None
     markers = arguments.get("markers", "true").lower() not in ("false", "0", "no")
     options = RunOptions(learner, seed, integer("movements"), integer("eval_every"),
-                         integer("period"), arguments["teacher"], str(Path(output).resolve()),
-                         arguments["storage"], {**shared, **assigned}, markers=markers,
-                         wait_for_teacher=wait,
+                         integer("demonstration_period"), arguments["teacher"],
+                         str(Path(output).resolve()), arguments["storage"],
+                         {**shared, **assigned}, markers=markers, wait_for_teacher=wait,
                          web_host=arguments.get("web_host", "127.0.0.1"),
                          web_port=integer("web_port") if "web_port" in arguments else 8765,
                          web_token=arguments.get("web_token", ""),

@@ -73,9 +73,9 @@ def web_run(tmp_path_factory, ros_domain):
     group = ProcessGroup(env=dict(os.environ), log_dir=runs / "logs")
     child = group.start("web-run", [
         RUN, "sgim-d", "--seed", str(SEED), "--movements", str(MOVEMENTS), "--eval-every",
-        str(3 * PERIOD), "--period", str(PERIOD), "--teacher", "web", "--wait-for-teacher",
-        "forever", "--web-host", host, "--web-token", TOKEN, "--web-port", "0",
-        "--web-linger", str(LINGER), "--runs-dir", str(runs), "--name", "web", "--domain",
+        str(3 * PERIOD), "--demonstration-period", str(PERIOD), "--teacher", "web",
+        "--wait-for-teacher", "forever", "--web-host", host, "--web-token", TOKEN, "--web-port",
+        "0", "--web-linger", str(LINGER), "--runs-dir", str(runs), "--name", "web", "--domain",
         str(ros_domain), "--quiet", "--timeout", "900"],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     address = runs / "web" / "web_teacher.url"

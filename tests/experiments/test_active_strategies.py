@@ -49,7 +49,7 @@ def test_the_pinned_experiment_makes_50_runs_and_shares_the_study_s_30():
         ("sgim-acts", ()), ("sgim-d", (("teacher_turns", "centre,west,rough"),)),
         ("sgim-d", ()), ("saggriac", ()), ("demo-only", ())]}
     turns = next(s for s in specs if s.params)
-    assert turns.period == 150 and "teacher_turns=centre,west,rough" in turns.argv()
+    assert turns.demonstration_period == 150 and "teacher_turns=centre,west,rough" in turns.argv()
     mine, study = exp.run_fingerprints(), pinned.find("study").run_fingerprints()
     shared = {name for name in mine if study.get(name) == mine[name]}
     assert len(shared) == 30
@@ -83,7 +83,7 @@ def repo(scratch_repo, monkeypatch) -> Path:
         runs:
           movements: 20
           eval_every: 10
-          period: 5
+          demonstration_period: 5
           seeds: 3
         """) + GRID)
     monkeypatch.setattr(acts_choices, "WINDOW", 10)

@@ -29,7 +29,7 @@ def experiment(name: str, pages_: list[str], learners: list[str], seeds: list[in
         runs:
           movements: 40
           eval_every: 20
-          period: 20
+          demonstration_period: 20
           seeds: {seeds}
           learner: {learners}
         """

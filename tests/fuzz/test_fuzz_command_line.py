@@ -53,8 +53,8 @@ def argument_lists(draw, root: Path) -> list[str]:
                                str(root / "a-file")])
     options = {
         "--seed": numbers, "--movements": numbers, "--eval-every": numbers,
-        "--period": numbers, "--teacher": st.sampled_from(["automatic", "human", "web",
-                                                           "external", "robot"]),
+        "--demonstration-period": numbers,
+        "--teacher": st.sampled_from(["automatic", "human", "web", "external", "robot"]),
         "--wait-for-teacher": numbers, "--web-port": numbers, "--web-host": st.sampled_from(
             ["127.0.0.1", "0.0.0.0", "::1", "localhost", "example.org", "", "a\nb"]),
         "--web-token": st.sampled_from(["", "short", "x" * 16, "t" * 40]),

@@ -371,9 +371,9 @@ def test_the_launch_file_starts_what_run_experiment_starts(tmp_path, learner, te
     params_file = tmp_path / "extra.yaml"
     params_file.write_text("/**:\n  ros__parameters:\n    goal_budget: 7\n"
                            "sim_bridge:\n  ros__parameters:\n    noise: 0.01\n")
-    argv = [learner, "--seed", "4", "--movements", "300", "--eval-every", "100", "--period",
-            "50", "--teacher", teacher, "--runs-dir", str(tmp_path), "--name", "run",
-            "--params-file", str(params_file), "--param", "imitation_count=3"]
+    argv = [learner, "--seed", "4", "--movements", "300", "--eval-every", "100",
+            "--demonstration-period", "50", "--teacher", teacher, "--runs-dir", str(tmp_path),
+            "--name", "run", "--params-file", str(params_file), "--param", "imitation_count=3"]
     web = ["--wait-for-teacher", "30", "--web-port", "0"] if teacher == "web" else []
     plan = plan_new(_args(*argv, *web))
     plan.lock.release()
@@ -384,7 +384,7 @@ def test_the_launch_file_starts_what_run_experiment_starts(tmp_path, learner, te
 
     launch = _launch_module().node_arguments({
         "learner": learner, "seed": "4", "movements": "300", "eval_every": "100",
-        "period": "50", "teacher": teacher, "storage": "mcap",
+        "demonstration_period": "50", "teacher": teacher, "storage": "mcap",
         "output": str(tmp_path / "run" / "bag"), "params_file": str(params_file),
         "param": "imitation_count=3",
         **({"wait_for_teacher": "30", "web_port": "0"} if teacher == "web" else {})})

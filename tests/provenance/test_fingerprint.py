@@ -91,7 +91,7 @@ def test_a_graph_runs_fingerprint_depends_on_what_shapes_it_only():
     patient = {"startup_timeout": 600.0, "settle_time": 9.0, "map_timeout": 300.0}
     assert of(overrides=patient).value == base.value
     assert of(overrides={"zeta": 20}).differences(base) == ["parameters (zeta)"]
-    assert of(period=50).differences(base) == ["parameters (demonstration_period)"]
+    assert of(demonstration_period=50).differences(base) == ["parameters (demonstration_period)"]
     assert of(movements=1000).value != base.value
     assert "node teacher" in of("saggriac").differences(base)[0]
     # what it was made from is readable, by node, without the per-run names

@@ -126,7 +126,7 @@ def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
     first = ros_processes.start(
         "run-interrupted",
         [RUN, "sgim-d", "--seed", "5", "--movements", "200", "--eval-every", "100",
-         "--period", "100", "--runs-dir", str(tmp_path), "--name", "cut", *common,
+         "--demonstration-period", "100", "--runs-dir", str(tmp_path), "--name", "cut", *common,
          "--param", "teacher_timeout=600.0", "--prefix", silent_teacher],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     # The arbiter and the recorder hear the word; the run has started.

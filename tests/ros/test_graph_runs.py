@@ -43,8 +43,9 @@ def run_graph(ros_processes, ros_domain, tmp_path, learner, *extra, timeout=300,
     child = ros_processes.start(
         f"run-{learner}",
         [RUN, learner, "--seed", str(seed), "--movements", str(MOVEMENTS), "--eval-every",
-         str(eval_every), "--period", str(PERIOD), "--runs-dir", str(tmp_path), "--name",
-         learner, "--domain", str(ros_domain), "--quiet", "--timeout", str(timeout), *extra],
+         str(eval_every), "--demonstration-period", str(PERIOD), "--runs-dir", str(tmp_path),
+         "--name", learner, "--domain", str(ros_domain), "--quiet", "--timeout", str(timeout),
+         *extra],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     return child
 

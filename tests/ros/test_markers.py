@@ -37,7 +37,7 @@ def test_marker_topics_show_the_run_live_and_in_the_bag(ros_processes, ros_domai
     movements = client.capture(Movement, "/movements", qos.RECORDS)
     child = ros_processes.start("markers-run", [
         RUN, "sgim-d", "--seed", "3", "--movements", str(MOVEMENTS), "--eval-every", "100",
-        "--period", "100", "--runs-dir", str(tmp_path), "--name", "run", "--domain",
+        "--demonstration-period", "100", "--runs-dir", str(tmp_path), "--name", "run", "--domain",
         str(ros_domain), "--quiet", "--timeout", "300"],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     assert client.spin_until(lambda: child.poll() is not None, timeout=330), "run too long"

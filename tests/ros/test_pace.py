@@ -52,8 +52,8 @@ def test_turns_step_pause_and_the_end_of_the_run_at_the_prompt(ros_processes, ro
 
     child = ros_processes.start("pace-run", [
         RUN, "sgim-d", "--seed", "5", "--movements", str(MOVEMENTS), "--eval-every", "0",
-        "--period", str(PERIOD), "--teacher", "human", "--wait-for-teacher", "forever",
-        "--runs-dir", str(tmp_path), "--name", "run", "--domain", str(ros_domain),
+        "--demonstration-period", str(PERIOD), "--teacher", "human", "--wait-for-teacher",
+        "forever", "--runs-dir", str(tmp_path), "--name", "run", "--domain", str(ros_domain),
         "--timeout", "300"],
         stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     term = Prompt(child)
@@ -110,7 +110,7 @@ def test_wait_for_teacher_seconds_ends_each_turn_and_zero_never_waits(
     movements, period = 100, 50
     child = ros_processes.start(f"wait-{teacher}", [
         RUN, "sgim-d", "--seed", "6", "--movements", str(movements), "--eval-every", "0",
-        "--period", str(period), "--teacher", teacher, "--wait-for-teacher", wait,
+        "--demonstration-period", str(period), "--teacher", teacher, "--wait-for-teacher", wait,
         *(["--web-port", "0"] if teacher == "web" else []), "--runs-dir", str(tmp_path),
         "--name", "run", "--domain", str(ros_domain), "--quiet", "--timeout", "300"],
         stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)

@@ -32,10 +32,11 @@ def test_a_demonstration_given_but_not_taken_is_given_again_on_resume(
     words = client.capture(Demonstration, "/demonstrations", qos.RECORDS)
     run_dir = tmp_path / "cut"
     child = ros_processes.start(
-        "run-cut", [RUN, "sgim-d", "--seed", "1", "--movements", str(MOVEMENTS), "--period",
-                    str(PERIOD), "--eval-every", "60", "--runs-dir", str(tmp_path), "--name",
-                    "cut", "--domain", str(ros_domain), "--quiet", "--param",
-                    "tolerance_noise=0.1"],  # a strict teacher: it shows something each turn
+        "run-cut", [RUN, "sgim-d", "--seed", "1", "--movements", str(MOVEMENTS),
+                    "--demonstration-period", str(PERIOD), "--eval-every", "60", "--runs-dir",
+                    str(tmp_path), "--name", "cut", "--domain", str(ros_domain), "--quiet",
+                    # a strict teacher: it shows something each turn
+                    "--param", "tolerance_noise=0.1"],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     params = str(run_dir / "params.yaml")
     # Stop the explorer at the turn's boundary: its job never ends, so the arbiter never

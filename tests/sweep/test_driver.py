@@ -13,7 +13,8 @@ from tests.sweep.test_results import make_run, unlike_fingerprint
 def _sweep(tmp_path):
     path = tmp_path / "two.yaml"
     path.write_text(yaml.safe_dump({"learner": "sgim-d", "movements": 100, "seeds": [2],
-                                    "period": [50, 150], "param": {"imitation_count": 3}}))
+                                    "demonstration_period": [50, 150],
+                                    "param": {"imitation_count": 3}}))
     return path, tmp_path / "runs"
 
 

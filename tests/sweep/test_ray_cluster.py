@@ -29,8 +29,8 @@ pytestmark = [pytest.mark.ros, pytest.mark.slow]
 RUN_SWEEP = str(REPO / "ros_ws" / "run_sweep.sh")
 # 2 seeds x 100 movements: a run for each node, and one to lose with the worker. (A list of
 # settings multiplies the runs, which tests/sweep/test_sweep_file.py checks without Ray.)
-SWEEP = {"movements": 100, "eval_every": 50, "seeds": 2, "learner": "sgim-d", "period": 50,
-         "run_timeout": 600}
+SWEEP = {"movements": 100, "eval_every": 50, "seeds": 2, "learner": "sgim-d",
+         "demonstration_period": 50, "run_timeout": 600}
 RUNS = 2
 SWEEP_TIMEOUT = 1500  # seconds; a 100-movement run takes about 35 s on 2 loaded cores
 

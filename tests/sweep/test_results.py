@@ -14,7 +14,7 @@ from sgim_nodes.sweep import results, task
 from sgim_nodes.sweep.results import State, install, run_state
 from sgim_nodes.sweep.sweep_file import expand, spec_fingerprint
 
-SPEC = expand({"learner": "sgim-d", "movements": 100, "seeds": [2], "period": 50,
+SPEC = expand({"learner": "sgim-d", "movements": 100, "seeds": [2], "demonstration_period": 50,
                "param": {"imitation_count": 3}})[0]
 
 

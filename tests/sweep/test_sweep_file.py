@@ -23,7 +23,7 @@ def _names(document: dict) -> list[str]:
 
 def test_defaults_are_run_experiments_own():
     args = experiment_options.parse_args(["sgim-d"])
-    expected = {"period": args.period, "movements": args.movements,
+    expected = {"demonstration_period": args.demonstration_period, "movements": args.movements,
                 "eval_every": args.eval_every, "teacher": args.teacher, "storage": args.storage}
     assert expected == sweep_file.DEFAULTS
 
@@ -31,7 +31,8 @@ def test_defaults_are_run_experiments_own():
 def test_blocks_are_cartesian_products_and_their_union():
     runs = expand({"movements": 100, "seeds": 2, "grid": [
         {"learner": ["saggriac", "demo-only"]},
-        {"learner": "sgim-d", "period": [50, 150], "param": {"imitation_count": [3, 5]}}]})
+        {"learner": "sgim-d", "demonstration_period": [50, 150],
+         "param": {"imitation_count": [3, 5]}}]})
     # per seed: 2 + 2 x 2 runs; seed-major so that a sweep cut short covers every setting
     assert len(runs) == 12
     assert [r.seed for r in runs] == [0] * 6 + [1] * 6
@@ -41,12 +42,12 @@ def test_blocks_are_cartesian_products_and_their_union():
 
 
 def test_period_maps_to_run_experiments_option_and_params_pass_through():
-    [run] = expand({"learner": "sgim-d", "period": 50, "movements": 100, "param": {
+    [run] = expand({"learner": "sgim-d", "demonstration_period": 50, "movements": 100, "param": {
         "inverse_model": "nearest", "explore_gain": 2.5, "wait_for_evaluation": False,
         "outcome_noise": 1e-5, "imitation_count": 3, "competence_reference": "fixed"}})
     argv = run.argv()
     assert argv[:2] == ["sgim-d", "--seed"]
-    assert argv[argv.index("--period") + 1] == "50"
+    assert argv[argv.index("--demonstration-period") + 1] == "50"
     given = [argv[i + 1] for i, a in enumerate(argv) if a == "--param"]
     assert given == ["competence_reference=fixed", "explore_gain=2.5", "imitation_count=3",
                      "inverse_model=nearest", "outcome_noise=1.0e-05",
@@ -54,7 +55,7 @@ def test_period_maps_to_run_experiments_option_and_params_pass_through():
     # run_experiment reads each value back with YAML: the very values of the file, which are
     # what its metadata.yaml will record
     parsed = experiment_options.parse_args(argv)
-    assert parsed.period == 50
+    assert parsed.demonstration_period == 50
     assigned, _ = parse_assignments(parsed.param)
     assert check(assigned) == {"competence_reference": "fixed", "explore_gain": 2.5,
                                "imitation_count": 3, "inverse_model": "nearest",
@@ -65,13 +66,13 @@ def test_period_maps_to_run_experiments_option_and_params_pass_through():
 
 
 def test_a_learner_without_teacher_ignores_period_and_teacher():
-    runs = expand({"learner": ["sgim-d", "saggriac"], "period": [50, 500],
+    runs = expand({"learner": ["sgim-d", "saggriac"], "demonstration_period": [50, 500],
                    "param": {"explore_gain": 2}})
     assert sorted(r.name for r in runs) == [
         "saggriac-explore_gain=2-seed0", "sgim-d-P50-explore_gain=2-seed0",
         "sgim-d-P500-explore_gain=2-seed0"]
     saggriac = next(r for r in runs if r.learner == "saggriac")
-    assert "--period" not in saggriac.argv() and "--teacher" not in saggriac.argv()
+    assert "--demonstration-period" not in saggriac.argv() and "--teacher" not in saggriac.argv()
     assert saggriac.argv()[-1] == "explore_gain=2"
     # an integer given to a float parameter is recorded as the float the node reads
     assert saggriac.expected_parameters()["explore_gain"] == 2.0
@@ -118,8 +119,8 @@ def test_a_list_is_one_value_when_wrapped():
 def test_default_values_make_the_default_run_once():
     runs = expand({"seeds": [3], "grid": [
         {"learner": "sgim-d"},
-        {"learner": "sgim-d", "period": 150, "param": {"imitation_count": 5,
-                                                        "explore_gain": 4}}]})
+        {"learner": "sgim-d", "demonstration_period": 150,
+         "param": {"imitation_count": 5, "explore_gain": 4}}]})
     assert [r.name for r in runs] == ["sgim-d-seed3"]
     assert "--param" not in runs[0].argv()
 
@@ -145,7 +146,8 @@ def test_seed_forms():
 @pytest.mark.parametrize(("document", "message"), [
     ({"learner": "sgim-dd"}, "unknown learner 'sgim-dd'"),
     ({"learner": "sgim-d", "imitation_count": 3}, "goes under 'param:'"),
-    ({"learner": "sgim-d", "param": {"demonstration_period": 50}}, "use the setting 'period'"),
+    ({"learner": "sgim-d", "param": {"demonstration_period": 50}},
+     "use the setting 'demonstration_period'"),
     ({"learner": "sgim-d", "param": {"output": "x"}}, "run_experiment sets it"),
     ({"learner": "sgim-d", "param": {"explore_gian": 2}}, "did you mean 'explore_gain'"),
     ({"learner": "sgim-d", "param": {"imitation_count": [3, -1]}}, "imitation_count"),
@@ -153,7 +155,8 @@ def test_seed_forms():
     ({"learner": "sgim-d", "teacher": "human"}, "need a person"),
     ({"learner": "sgim-d", "seeds": -1}, "seeds must be integers >= 0"),
     ({"learner": "sgim-d", "seeds": "many"}, "seeds must be a count"),
-    ({"learner": "sgim-d", "period": 0}, "period must be an integer >= 1"),
+    ({"learner": "sgim-d", "demonstration_period": 0},
+     "demonstration_period must be an integer >= 1"),
     ({"learner": "sgim-d", "movements": [100, 200]}, "share the folder sgim-d-seed0"),
     ({"grid": [{"learner": "random", "runs_dir": "x"}]}, "belongs at the top"),
     ({"grid": [{"seeds": 2}]}, "no learner"),
@@ -191,7 +194,7 @@ def test_the_pinned_study_is_run_studys_study():
     assert {r.name for r in runs} == expected
     for run in runs:
         assert run.movements == args.movements and run.eval_every == args.eval_every
-        assert run.params == () and run.period in (None, 150)
+        assert run.params == () and run.demonstration_period in (None, 150)
 
 
 def test_shipped_sweep_files_expand():

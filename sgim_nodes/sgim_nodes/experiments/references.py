@@ -179,7 +179,8 @@ def reference_specs(experiment: Any) -> dict[str, Any]:
     for run, config in zip(runs, configurations(experiment).values(), strict=True):
         if config in first:
             continue
-        movements, every = reference_length(run.movements, getattr(run, "period", None))
+        movements, every = reference_length(run.movements,
+                                            getattr(run, "demonstration_period", None))
         first[config] = dataclasses.replace(run, seed=REFERENCE_SEED, movements=movements,
                                             eval_every=every)
     return first

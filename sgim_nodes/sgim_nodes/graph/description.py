@@ -111,7 +111,7 @@ class RunOptions:
     seed: int = 0
     movements: int = 5000
     eval_every: int = 250
-    period: int = SOCIAL_DEFAULTS.demonstration_period
+    demonstration_period: int = SOCIAL_DEFAULTS.demonstration_period
     teacher: str = "automatic"
     output: str = ""  # the bag directory
     storage: str = "mcap"
@@ -134,7 +134,8 @@ class RunOptions:
                             f"{self.teacher!r}")
         if self.storage not in STORAGES:
             problems.append(f"storage must be one of {', '.join(STORAGES)}")
-        for name, low in (("seed", 0), ("movements", 1), ("eval_every", 0), ("period", 1)):
+        for name, low in (("seed", 0), ("movements", 1), ("eval_every", 0),
+                          ("demonstration_period", 1)):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < low:
                 problems.append(f"{name} must be an integer >= {low}, got {value!r}")
@@ -150,7 +151,7 @@ class RunOptions:
 # Parameters that the run's own options set: a NAME=VALUE for them would be overwritten.
 OPTION_PARAMETERS = {"learner": "the learner argument", "seed": "--seed",
                      "movements": "--movements", "eval_every": "--eval-every",
-                     "demonstration_period": "--period", "teacher": "--teacher",
+                     "demonstration_period": "--demonstration-period", "teacher": "--teacher",
                      "output": "the run folder", "storage": "--storage",
                      "wait_for_recorder": "the launcher (always true in a run)",
                      "movement_listeners": "the launcher (the graph's nodes that hear the "
@@ -360,7 +361,7 @@ def parameters(options: RunOptions, node_overrides: Mapping[str, Mapping[str, An
         values["teachers"] = ",".join([*names, *([] if WEB_EXPERT in names else [WEB_EXPERT])])
     values.update(
         learner=options.learner, seed=options.seed, movements=options.movements,
-        eval_every=options.eval_every, demonstration_period=options.period,
+        eval_every=options.eval_every, demonstration_period=options.demonstration_period,
         teacher=ARBITER_TEACHER[options.teacher] if kind.social else "none",
         storage=options.storage, wait_for_recorder=True,
         movement_listeners=",".join(movement_listeners(options, acts_teachers(values))),

@@ -21,13 +21,13 @@ from sgim_ros.params import SEED_MAX, seed_problem
 
 REPO = Path(__file__).resolve().parents[3]
 DEFAULTS = {"seed": 0, "movements": 5000, "eval_every": 250,
-            "period": SOCIAL_DEFAULTS.demonstration_period,
+            "demonstration_period": SOCIAL_DEFAULTS.demonstration_period,
             "teacher": "automatic", "storage": "mcap", "wait_for_teacher": 0.0,
             "web_port": 8765, "web_host": "127.0.0.1", "web_token": "", "web_linger": 600.0,
             "no_markers": False}
 # Options a resumed run takes from its folder: giving one with --resume is refused.
-RUN_OPTIONS = ("seed", "movements", "eval_every", "period", "teacher", "storage", "name",
-               "param", "params_file", "wait_for_teacher", "web_port", "web_host",
+RUN_OPTIONS = ("seed", "movements", "eval_every", "demonstration_period", "teacher", "storage",
+               "name", "param", "params_file", "wait_for_teacher", "web_port", "web_host",
                "web_token", "web_linger", "no_markers")
 FOREVER = ("forever", "inf", "-1")  # --wait-for-teacher values that mean "until it acts"
 WEB_TOKEN_MIN = 16  # the web teacher's own minimum (teacher.web.server.MIN_TOKEN)
@@ -82,18 +82,19 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                    help="movement budget; the paper's is 5000 (default: 5000)")
     p.add_argument("--eval-every", type=int,
                    help="movements between evaluations; paper 250 (default: 250)")
-    p.add_argument("--period", type=int,
+    p.add_argument("--demonstration-period", type=int,
                    help="movements between demonstrations, the paper's P (default: "
-                        f"{DEFAULTS['period']})")
+                        f"{DEFAULTS['demonstration_period']})")
     p.add_argument("--teacher", choices=TEACHERS,
-                   help="automatic (default): the teacher node, every --period movements; "
-                        "human: you, at the human_input prompt in this terminal; web: you, on "
-                        "the web_teacher page (its address is printed); external: no teacher "
-                        "node, demonstrations come from any other publisher at any time")
+                   help="automatic (default): the teacher node, every --demonstration-period "
+                        "movements; human: you, at the human_input prompt in this terminal; "
+                        "web: you, on the web_teacher page (its address is printed); external: "
+                        "no teacher node, demonstrations come from any other publisher at any "
+                        "time")
     p.add_argument("--wait-for-teacher", type=wait_seconds, metavar="SECONDS",
-                   help="human or web teacher: stop every --period movements and wait this "
-                        "long for a demonstration (0: never wait; 'forever': until the "
-                        "teacher demonstrates or resumes). Default: 0")
+                   help="human or web teacher: stop every --demonstration-period movements "
+                        "and wait this long for a demonstration (0: never wait; 'forever': "
+                        "until the teacher demonstrates or resumes). Default: 0")
     p.add_argument("--web-port", type=int,
                    help="web teacher: the page's port (0: any free one; default 8765)")
     p.add_argument("--web-host",
@@ -147,9 +148,9 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     for name, value in DEFAULTS.items():
         if getattr(args, name) is None:
             setattr(args, name, value)
-    for name in ("movements", "period"):
+    for name in ("movements", "demonstration_period"):
         if getattr(args, name) < 1:
-            p.error(f"--{name} must be >= 1")
+            p.error(f"--{name.replace('_', '-')} must be >= 1")
     if seed_problem(args.seed):
         p.error(f"--seed must be in 0..{SEED_MAX} (2**32 - 1): the graph carries it in a "
                 "uint32")

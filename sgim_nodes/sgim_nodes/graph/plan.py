@@ -90,9 +90,9 @@ def plan_new(args: argparse.Namespace) -> Plan:
     if run_name_problem(name):  # parse_args refuses it; a caller's own Namespace too
         raise RunFolderError(f"run name {name!r}: {run_name_problem(name)}")
     run_dir = args.runs_dir / name
-    options = RunOptions(args.learner, args.seed, args.movements, args.eval_every, args.period,
-                         args.teacher, str(run_dir / "bag"), args.storage,
-                         {**files_shared, **assigned}, markers=not args.no_markers,
+    options = RunOptions(args.learner, args.seed, args.movements, args.eval_every,
+                         args.demonstration_period, args.teacher, str(run_dir / "bag"),
+                         args.storage, {**files_shared, **assigned}, markers=not args.no_markers,
                          wait_for_teacher=args.wait_for_teacher, web_host=args.web_host,
                          web_port=args.web_port, web_token=args.web_token,
                          web_address_file=str(run_dir / "web_teacher.url"),

@@ -7,21 +7,21 @@
     grid:                         # a list of blocks; each block is a cartesian product
       - learner: [saggriac, demo-only]
       - learner: sgim-d
-        period: [50, 150, 500]    # the paper's P -> run_experiment --period
+        demonstration_period: [50, 150, 500]  # the paper's P -> --demonstration-period
         param:                    # anything else -> run_experiment --param NAME=VALUE
           imitation_count: [3, 5]
 
 A list is swept; to pass a list as one value, wrap it: ``[[1, 2]]``. Every parameter value, and
 every combination of them, is checked as run_experiment checks it (graph/description.py), so a
 misspelt name or a bad value stops the sweep before any run starts. A run of a learner without
-a teacher (saggriac, random-goals, random) ignores ``period``, ``teacher`` and the teacher's
-parameters (``teacher_choice``, ``demonstration_content``, ``timing``, ...), so those runs are
-made once, not once per P or per social mode; a social mode a learner cannot play (demo-only
-with ``timing: on-request`` or goal-only demonstrations) stops the sweep before any run.
-Runs are named ``<learner>[-P<p>][-<name>=<value>...]-seed<N>`` from the settings that differ
-from run_experiment's and learner.yaml's defaults, so the paper's default runs keep
-``run_study.sh``'s names (``sgim-d-seed3``) and a sweep file can grow new blocks without
-renaming the runs already done.
+a teacher (saggriac, random-goals, random) ignores ``demonstration_period``, ``teacher`` and the
+teacher's parameters (``teacher_choice``, ``demonstration_content``, ``timing``, ...), so those
+runs are made once, not once per P or per social mode; a social mode a learner cannot play
+(demo-only with ``timing: on-request`` or goal-only demonstrations) stops the sweep before any
+run. Runs are named ``<learner>[-P<p>][-<name>=<value>...]-seed<N>`` (P: the
+``demonstration_period``) from the settings that differ from run_experiment's and
+learner.yaml's defaults, so the paper's default runs keep ``run_study.sh``'s names
+(``sgim-d-seed3``) and a sweep file can grow new blocks without renaming the runs already done.
 """
 
 from __future__ import annotations
@@ -60,17 +60,17 @@ from sgim_ros.command_line import YamlProblem, parse_yaml, shown
 from sgim_ros.params import SEED_MAX, ParameterError, seed_problem
 
 # Settings of one run: the file's keys (param: -> run_experiment --param NAME=VALUE).
-SETTINGS = ("learner", "period", "movements", "eval_every", "teacher", "storage", "seeds",
-            "param")
+SETTINGS = ("learner", "demonstration_period", "movements", "eval_every", "teacher", "storage",
+            "seeds", "param")
 TOP_ONLY = ("name", "runs_dir", "run_timeout", "grid")
 TEACHERS = ("automatic", "external")  # human and web need a person: not in a sweep
 # The parameters run_experiment sets from its options, and the sweep setting that sets them.
 SETTING_OF_PARAM = {"learner": "learner", "seed": "seeds", "movements": "movements",
-                    "eval_every": "eval_every", "demonstration_period": "period",
+                    "eval_every": "eval_every", "demonstration_period": "demonstration_period",
                     "teacher": "teacher", "storage": "storage"}
 # run_experiment's own defaults.
 DEFAULTS = {key: experiment_options.DEFAULTS[key]
-            for key in ("period", "movements", "eval_every", "teacher", "storage")}
+            for key in ("demonstration_period", "movements", "eval_every", "teacher", "storage")}
 MAX_SEEDS = 100_000  # of one block: a sweep of more runs than that is a typo, not a plan
 _UNSAFE = re.compile(r"[^A-Za-z0-9._+=,-]+")
 
@@ -87,7 +87,7 @@ class RunSpec:
     seed: int
     movements: int
     eval_every: int
-    period: int | None  # None: a learner without a teacher
+    demonstration_period: int | None  # None: a learner without a teacher
     teacher: str | None
     storage: str
     params: tuple[tuple[str, str], ...] = ()  # (name, YAML text), sorted by name
@@ -102,7 +102,8 @@ class RunSpec:
         args = [self.learner, "--seed", str(self.seed), "--movements", str(self.movements),
                 "--eval-every", str(self.eval_every), "--storage", self.storage]
         if self.social:
-            args += ["--period", str(self.period), "--teacher", str(self.teacher)]
+            args += ["--demonstration-period", str(self.demonstration_period), "--teacher",
+                     str(self.teacher)]
         for name, text in self.params:
             args += ["--param", f"{name}={text}"]
         return args
@@ -113,7 +114,7 @@ class RunSpec:
                                "movements": self.movements, "eval_every": self.eval_every,
                                "storage": self.storage}
         if self.social:
-            out.update(period=self.period, teacher=self.teacher)
+            out.update(demonstration_period=self.demonstration_period, teacher=self.teacher)
         out["param"] = {name: yaml.safe_load(text) for name, text in self.params}
         return out
 
@@ -123,7 +124,7 @@ class RunSpec:
                                     "movements": self.movements, "eval_every": self.eval_every,
                                     "storage": self.storage}
         if self.social:
-            expected["demonstration_period"] = self.period
+            expected["demonstration_period"] = self.demonstration_period
             expected["teacher"] = ARBITER_TEACHER[str(self.teacher)]
         else:
             expected["teacher"] = "none"
@@ -144,15 +145,16 @@ def spec_fingerprint(spec: RunSpec) -> Fingerprint:
     """The learner fingerprint run_experiment gives this spec's run (its options as
     run_experiment reads spec.argv(); the seed and the folder do not count)."""
     return _fingerprint_of(spec.learner, spec.movements, spec.eval_every,
-                           spec.period or DEFAULTS["period"], spec.teacher or DEFAULTS["teacher"],
-                           spec.storage, spec.params)
+                           spec.demonstration_period or DEFAULTS["demonstration_period"],
+                           spec.teacher or DEFAULTS["teacher"], spec.storage, spec.params)
 
 
 @cache
-def _fingerprint_of(learner: str, movements: int, eval_every: int, period: int, teacher: str,
-                    storage: str, params: tuple[tuple[str, str], ...]) -> Fingerprint:
-    options = RunOptions(learner, 0, movements, eval_every, period, teacher, "", storage,
-                         checked_params(params))
+def _fingerprint_of(learner: str, movements: int, eval_every: int, demonstration_period: int,
+                    teacher: str, storage: str,
+                    params: tuple[tuple[str, str], ...]) -> Fingerprint:
+    options = RunOptions(learner, 0, movements, eval_every, demonstration_period, teacher, "",
+                         storage, checked_params(params))
     return fingerprint(parameters(options), graph(learner, teacher,
                                                   teachers=acts_teachers(options.overrides)))
 
@@ -190,8 +192,8 @@ def run_name(spec: RunSpec) -> str:
     """<learner>[-P<p>][-teacher=<t>][-<name>=<value>...]-seed<N>: the non-default settings
     (a spec's params hold only values that differ from learner.yaml's)."""
     tags = []
-    if spec.social and spec.period != DEFAULTS["period"]:
-        tags.append(f"P{spec.period}")
+    if spec.social and spec.demonstration_period != DEFAULTS["demonstration_period"]:
+        tags.append(f"P{spec.demonstration_period}")  # the paper's P, kept in run names
     if spec.social and spec.teacher != DEFAULTS["teacher"]:
         tags.append(f"teacher={spec.teacher}")
     tags += [_tag(name, text) for name, text in spec.params]
@@ -284,8 +286,8 @@ def _expand_block(block: dict[str, Any], where: str) -> Iterable[RunSpec]:
                                  f"{', '.join(learner_names())}")
     seeds = _seeds(block.get("seeds", 1), where)
     axes = {key: _as_list(block.get(key, DEFAULTS[key])) for key in DEFAULTS}
-    for value in axes["period"]:
-        _positive_int(value, "period", where)
+    for value in axes["demonstration_period"]:
+        _positive_int(value, "demonstration_period", where)
     for value in axes["movements"]:
         _positive_int(value, "movements", where)
     for value in axes["eval_every"]:
@@ -314,7 +316,7 @@ def _expand_block(block: dict[str, Any], where: str) -> Iterable[RunSpec]:
             raise SweepFileError(f"{where}: {error}") from None
     for seed, learner, movements, eval_every, storage, period, teacher, chosen in (
             itertools.product(seeds, learners, axes["movements"], axes["eval_every"],
-                              axes["storage"], axes["period"], axes["teacher"],
+                              axes["storage"], axes["demonstration_period"], axes["teacher"],
                               itertools.product(*values))):
         social = learner_kind(learner).social
         problems = social_mode_problems(RunOptions(learner, teacher=teacher),

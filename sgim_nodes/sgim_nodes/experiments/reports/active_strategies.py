@@ -87,9 +87,10 @@ def by_teacher(study: Study, group: str, spec: RunSpec) -> dict[str, float]:
     if spec.learner == ACTS:
         known = [s.name for s in FISHING_EXPERTS]
         names = [str(s).removeprefix("expert:") for r in runs for s in r.demo_source]
-    elif turns and spec.period:
+    elif turns and spec.demonstration_period:
         known = [n.strip() for n in str(yaml.safe_load(turns)).split(",")]
-        names = [known[int(m) // spec.period % len(known)] for r in runs for m in r.demo_index]
+        names = [known[int(m) // spec.demonstration_period % len(known)]
+                 for r in runs for m in r.demo_index]
     else:
         return {}
     counted = Counter(names)
