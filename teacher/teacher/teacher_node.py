@@ -70,6 +70,7 @@ from sgim_nodes.nodes.ros_glue import (
     floats,
     learner_node_params,
     run_node,
+    social_config,
     social_params,
     vec,
     world_scale,
@@ -124,10 +125,8 @@ class TeacherNode(Node):
         p, config = declare_learner(self, PARAMS)
         ts = load_checked(p["teaching_set"], p["action_size"], p["outcome_size"])
         tolerance = p["tolerance_noise"] * p["outcome_noise"]
+        social_config(p)  # the settings that go together, as the runner checks them
         if p["teacher_turns"]:
-            if p["timing"] == ON_REQUEST:
-                raise ParameterError("teacher_turns: teachers taking turns speak at their "
-                                     "boundaries, so timing must be 'period'")
             self.teacher = teacher_turns(p, ts, tolerance)
         else:
             self.teacher = Teacher(ts.actions, ts.outcomes, component_rng(p["seed"], "teacher"),

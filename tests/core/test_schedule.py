@@ -109,3 +109,55 @@ def test_no_cap_once_every_ask_is_spent():
 def test_a_schedule_refuses_a_negative_budget_or_a_period_below_one(budget, period):
     with pytest.raises(ValueError, match="budget >= 0 and period >= 1"):
         Schedule(budget, period, PERIOD, teacher=True)
+
+
+def _drive(schedule: Schedule, stop: int, seed: int = 3):
+    """One-movement own attempts with a stalled competence, asks put when due, each 7th
+    attempt cut by its job at the boundary: the records a run keeps, up to ``stop``."""
+    rng = np.random.default_rng(seed)
+    asks, attempts, turns = [], [], []
+    for count in range(1, stop + 1):
+        goal, competence = rng.uniform(-1, 1, 2), -0.5 + rng.normal(0, 0.01)
+        schedule.attempt_ended(goal, competence, cut_at=count if count % 7 == 0 else None)
+        attempts.append((count, goal, competence))
+        if schedule.ask_due(count):
+            ask = schedule.ask(count)
+            asks.append((ask.movement, ask.goal))
+        if schedule.turn_due(count):
+            schedule.take_turn(count)
+            turns.append(count)
+    return asks, attempts, turns
+
+
+@pytest.mark.parametrize("stop", [57, 150, 263, 357])
+def test_a_schedule_resumed_from_its_records_goes_on_as_the_uninterrupted_one(stop):
+    """Stopped at ``stop`` and resumed from what the run recorded (the asks put before it, the
+    attempts up to it), the schedule asks at the same movements about the same goals as the
+    schedule that was never stopped, from the boundary at ``stop`` on."""
+    whole = _asking()
+    asks, attempts, _ = _drive(whole, TOTAL)
+    resumed = _asking()
+    resumed.resume(stop, [], [a for a in asks if a[0] < stop],
+                   [a for a in attempts if a[0] <= stop])
+    if all(m != stop for m, _ in asks):  # then also the same state as the one never stopped
+        again = _asking()
+        _drive(again, stop)
+        assert (resumed.help.asks, resumed.help._recent) == (again.help.asks, again.help._recent)
+        assert np.array_equal(resumed.last_goal, again.last_goal)
+    rest = []
+    if resumed.ask_due(stop):
+        rest.append(resumed.ask(stop))
+    for count, goal, competence in (a for a in attempts if a[0] > stop):
+        resumed.attempt_ended(goal, competence, cut_at=count if count % 7 == 0 else None)
+        if resumed.ask_due(count):
+            rest.append(resumed.ask(count))
+    expected = [(m, g) for m, g in asks if m >= stop]
+    assert [a.movement for a in rest] == [m for m, _ in expected]
+    assert all(np.allclose(a.goal, g) for a, (_, g) in zip(rest, expected, strict=True))
+    assert any(m % 7 == 0 and m < stop for m, _ in asks) or stop < 350  # an ask that cut
+
+
+def test_a_resumed_schedule_keeps_the_teacher_turns_taken():
+    schedule = Schedule(TOTAL, P, PERIOD, teacher=True)
+    schedule.resume(120, [0, 50, 100], [], [])
+    assert not schedule.turn_due(100) and schedule.turn_due(150)

@@ -470,3 +470,20 @@ def test_the_launch_file_builds_a_launch_description_with_launch_ros(monkeypatch
                for h in actions if type(h).__name__ == "RegisterEventHandler"]
     assert watched == ["recorder", "evaluator", "markers", *GOALS]
     assert description in made["LaunchDescription"]
+
+
+def test_a_node_checks_its_run_level_settings_as_the_core_does():
+    """A node given teachers taking turns and timing on-request refuses them with the core's
+    words (core/social_config.py), not words of its own."""
+    from sgim_nodes.core.social_config import SocialConfig
+    from sgim_nodes.nodes.ros_glue import social_config
+    from sgim_ros.params import ParameterError
+
+    values = {"timing": "on-request", "teacher_turns": "centre, left", "seed": 3}
+    with pytest.raises(ValueError) as core:
+        SocialConfig(timing="on-request", teacher_turns=("centre", "left"))
+    with pytest.raises(ParameterError) as node:
+        social_config(values)
+    assert str(node.value) == f"parameter {core.value}"
+    assert social_config({**values, "timing": "period"}).teacher_turns == ("centre", "left")
+    assert social_config({"teacher_turns": ""}) == SocialConfig()

@@ -13,6 +13,7 @@ put (a goal attempt the ask did not cut is folded at once).
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -92,6 +93,33 @@ class Schedule:
     def _fold(self, goal: np.ndarray, competence: float) -> None:
         self.help.attempt_ended(competence)
         self.last_goal = np.asarray(goal, dtype=float)
+
+    # --- a resumed run ------------------------------------------------------------------
+    def resume(self, count: int, turns_taken: Iterable[int],
+               asks: Iterable[tuple[int, np.ndarray]],
+               attempts: Iterable[tuple[int, np.ndarray, float]]) -> None:
+        """Where a run stopped at movement ``count`` left the schedule, from its records: the
+        teacher's turns taken, the asks put ((movement, goal) in order) and the own goal
+        attempts ((movement, goal, competence) in order, imitations left out).
+
+        An attempt that ends where the last ask was put went into the window before the ask
+        if it ended by itself, after it if the ask cut it; the ask's goal tells which, since
+        it is the goal of the latest attempt folded before the ask. One case stays open: a run
+        stopped right where an ask was due, before it was put, whose last attempt the ask
+        would have cut is folded as if it had ended by itself."""
+        self.turns_taken = set(turns_taken)
+        if self.help is None:
+            return
+        put = [(m, np.asarray(g, dtype=float)) for m, g in asks if m < count]
+        self.help.asks = len(put)
+        last = put[-1] if put else None
+        own = [(m, np.asarray(g, dtype=float), float(c)) for m, g, c in attempts if m <= count]
+        for movement, goal, competence in own:
+            if last is None or movement > last[0] or (
+                    movement == last[0] and not np.allclose(goal, last[1])):  # the ask cut it
+                self.help.attempt_ended(competence)
+        if own:
+            self.last_goal = own[-1][1]
 
     # --- how far the learner's own work may go ------------------------------------------
     def cap(self, count: int) -> int:

@@ -12,7 +12,6 @@ names it.
 
 from __future__ import annotations
 
-import numpy as np
 from rclpy.node import Node
 
 from sgim_msgs.msg import Demonstration, HelpRequest
@@ -22,6 +21,15 @@ from sgim_ros.interfaces import publishes
 
 HELP_REQUESTS = publishes("help_requests", "the learner asks for help: on request, or "
                           "sgim-acts")
+
+
+def resume_schedule(schedule: Schedule, records, count: int, turns_taken) -> None:
+    """Give the schedule a stopped run's teacher turns, asks and own goal attempts (the
+    competences with a goal index), from its records."""
+    schedule.resume(count, turns_taken,
+                    [(h.movement_index, h.goal) for h in records.help_requests],
+                    [(c.movement_index, c.goal, c.competence) for c in records.competences
+                     if c.goal_index > 0])
 
 
 class HelpAsks:
@@ -35,26 +43,6 @@ class HelpAsks:
         self._asked_at: dict[int, int] = {}  # ask index -> the count it was made at
         self._out = HELP_REQUESTS.create(node)
 
-    def resume(self, records, count: int) -> None:
-        """Asks already made and the window since the last one, from a run's records (the
-        competences of own goal attempts: those with a goal index).
-
-        An attempt that ends where the last ask was made went into the window before the ask
-        if it ended by itself, after it if the ask cut it; the ask's goal tells which, since it
-        is the goal of the latest attempt folded before the ask. One case stays open: a run
-        stopped right where an ask was due, before it was made, whose last attempt the ask
-        would have cut is folded as if it had ended by itself."""
-        asks = [h for h in records.help_requests if h.movement_index < count]
-        self.schedule.help.asks = len(asks)
-        last = asks[-1] if asks else None
-        own = [c for c in records.competences if c.goal_index > 0 and c.movement_index <= count]
-        for c in own:
-            if last is None or c.movement_index > last.movement_index or (
-                    c.movement_index == last.movement_index
-                    and not np.allclose(c.goal, last.goal)):  # the attempt the ask cut
-                self.schedule.help.attempt_ended(c.competence)
-        if own:
-            self.schedule.last_goal = np.asarray(own[-1].goal, dtype=float)
 
     def ask(self, count: int) -> HelpRequest:
         """Put the schedule's question and publish it."""

@@ -5,7 +5,7 @@ action server of movement-by-movement jobs. Only translation lives here; algorit
 
 from __future__ import annotations
 
-from collections.abc import Awaitable, Callable, Sequence
+from collections.abc import Awaitable, Callable, Mapping, Sequence
 from dataclasses import fields
 from typing import Any
 
@@ -20,7 +20,7 @@ from sgim_nodes.core.environment import PROCESS_CODES, PROCESS_LABELS  # noqa: F
 from sgim_nodes.core.learner_registry import OWN_NAMES, SGIM_ACTS, SGIM_D, is_learner
 from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
 from sgim_nodes.core.scale import WorldScale, unit_box
-from sgim_nodes.core.social_config import declared
+from sgim_nodes.core.social_config import SocialConfig, declared
 from sgim_ros.entry import AsyncNode, run_node  # noqa: F401 - the nodes' shared entry point
 from sgim_ros.params import (
     Bounds,
@@ -184,6 +184,21 @@ def social_params(*names: str) -> tuple[Param, ...]:
         params.append(Param(name, d["default"], f"{d['help']}; SocialConfig.{name} in "
                             "core/social_config.py", ros_check(d["range"])))
     return tuple(params)
+
+
+def social_config(values: Mapping[str, Any]) -> SocialConfig:
+    """The run-level settings among a node's parameter values, checked once, as the core
+    checks them (core/social_config.py): ParameterError names what is wrong. A node's
+    `teacher_turns` is its comma-separated names."""
+    names = {f.name for f in fields(SocialConfig)}
+    given = {k: v for k, v in values.items() if k in names}
+    if isinstance(given.get("teacher_turns"), str):
+        given["teacher_turns"] = tuple(n.strip() for n in given["teacher_turns"].split(",")
+                                       if n.strip())
+    try:
+        return SocialConfig(**given)
+    except ValueError as error:
+        raise ParameterError(f"parameter {error}") from error
 
 
 def learner_node_params(*extra: Param) -> tuple[Param, ...]:

@@ -75,7 +75,7 @@ from sgim_nodes.nodes.graph_startup import (
     call_bounded,
     wait_for_graph,
 )
-from sgim_nodes.nodes.help_asks import HELP_REQUESTS, HelpAsks
+from sgim_nodes.nodes.help_asks import HELP_REQUESTS, HelpAsks, resume_schedule
 from sgim_nodes.nodes.pace import PACE_INTERFACES, PaceControl
 from sgim_nodes.nodes.ros_glue import (
     AsyncNode,
@@ -168,10 +168,8 @@ class SocialInteraction(AsyncNode):
         self.goals_folded = point.state.n_competences
         if self.episodes is not None:
             self.episodes.resume(point.records)
-        self.schedule.turns_taken = set(point.demonstration_turns)
+        resume_schedule(self.schedule, point.records, point.count, point.demonstration_turns)
         self.evaluated = set(point.evaluated)
-        if self.asks is not None:
-            self.asks.resume(point.records, point.count)
         demo = point.latest_demonstration
         if demo is not None and self.hosted is not None and self.social:
             self.hosted.on_demonstration(*shown_parts(demo))
