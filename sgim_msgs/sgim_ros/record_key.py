@@ -9,7 +9,9 @@ those), and the simulator signs every Movement with it: HMAC-SHA256 over the fie
 the movement, the first 16 bytes in `Movement.signature`. Every consumer checks the signature
 (bag/record_checks.py) and quarantines a record that lacks it or whose signature is wrong; the
 bag readers take the key from the run's folder. A run made without a key (an older bag, a node
-started alone) is read as before.
+started alone) is read as before; a folder whose movements are signed but whose key is gone
+(copied without it) is refused, since without the key a forgery reads like the simulator's
+record, unless SGIM_TRUST_UNKEYED=1 (`analyze --trust-unkeyed`) says to read it unchecked.
 """
 
 from __future__ import annotations
@@ -27,6 +29,17 @@ import numpy as np
 ENV = "SGIM_RECORD_KEY"
 KEY_FILE = "record.key"
 SIGNATURE_BYTES = 16
+TRUST_ENV = "SGIM_TRUST_UNKEYED"
+UNKEYED = "read without its record key"  # how a trusted keyless run is named in reports
+
+
+class MissingKey(ValueError):
+    """A run's movements are signed, but its folder has no key to check them with."""
+
+
+def trust_unkeyed() -> bool:
+    """Whether the user said to read signed runs whose key is missing, unchecked."""
+    return os.environ.get(TRUST_ENV, "").strip() not in ("", "0")
 
 
 def new_key() -> str:

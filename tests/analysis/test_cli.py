@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 from synthetic_study import FINALS
 
@@ -116,3 +117,31 @@ def test_reports_name_a_study_inside_the_working_directory_relatively(
     monkeypatch.chdir(tmp_path / "rel")
     assert main([str(study), "--out", str(out), "--times", "10"]) == 0
     assert json.loads((out / "results.json").read_text())["study"] == str(study.resolve())
+
+
+def test_a_signed_run_without_its_key_is_skipped_or_read_as_told(
+        make_study, tmp_path: Path, capsys: pytest.CaptureFixture, monkeypatch) -> None:
+    """A run whose movements are signed but whose record.key was not copied is skipped with
+    the reason; with --trust-unkeyed it counts, and results.md says so at its top."""
+    from synthetic_study import movement, run_messages, write_run
+
+    from sgim_ros import record_key
+
+    monkeypatch.delenv(record_key.TRUST_ENV, raising=False)
+    study = make_study("keyless", seeds=2, learners=("random",))
+    key = record_key.new_key()
+    messages = run_messages("random", 7, {0: 0.5, 20: 0.3})
+    for topic, msg in messages:
+        if topic == "movements":
+            msg.signature = np.frombuffer(record_key.movement_signature(key, msg), np.uint8)
+    write_run(study, "random", 7, messages)  # copied without its key
+    assert movement(1, None).signature.size == 0  # the study's other runs sign nothing
+    assert main([str(study), "--out", str(tmp_path / "strict")]) == 0
+    err = capsys.readouterr().err
+    assert "random-seed7" in err and f"key ({record_key.KEY_FILE}) is not in its folder" in err
+    assert "random-seed7" not in (tmp_path / "strict" / "results.md").read_text().split(
+        "## Runs")[0]
+    assert main([str(study), "--out", str(tmp_path / "trusted"), "--trust-unkeyed",
+                 "--no-cache"]) == 0
+    top = (tmp_path / "trusted" / "results.md").read_text().split("## Runs")[0]
+    assert f"Runs {record_key.UNKEYED} (--trust-unkeyed): random-seed7." in top

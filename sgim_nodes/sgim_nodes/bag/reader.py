@@ -37,7 +37,15 @@ from sgim_nodes.bag.records import RECORD_TYPES, RunRecords, to_record
 from sgim_nodes.bag.types import TOPICS
 from sgim_nodes.bag.validation import RunValidator, summarise
 from sgim_nodes.bag.writer import STAGING_PREFIX
-from sgim_ros.record_key import read_key
+from sgim_ros.record_key import (
+    KEY_FILE,
+    TRUST_ENV,
+    UNKEYED,
+    MissingKey,
+    read_key,
+    signature_of,
+    trust_unkeyed,
+)
 
 # rosbags is imported where a bag is read, not with this module: every node imports it (for
 # its checks and to resume) and most never read a bag; its import costs about 0.17 s of CPU.
@@ -292,6 +300,9 @@ def load_run(path: str | Path, topics: Iterable[str] | None = None,
     def declared(topic: str) -> None:
         run.topics.add(topic.rsplit("/", 1)[-1])
 
+    keyless = not validator.limits.record_key
+    unkeyed = False
+
     for record in read_raw(path, wanted, on_gap=validator.resync, on_topic=declared):
         name = record.topic.rsplit("/", 1)[-1]
         if record.msgtype != TOPICS.get(name):
@@ -304,6 +315,16 @@ def load_run(path: str | Path, topics: Iterable[str] | None = None,
             validator.quarantine(name, -1, Problem("undecodable", f"undecodable: {error}"),
                                  record.timestamp_ns)
             continue
+        if keyless and not unkeyed and name == "movements" and signature_of(message):
+            if not trust_unkeyed():
+                raise MissingKey(
+                    f"{path}: its movements are signed but the run's key ({KEY_FILE}) is not "
+                    "in its folder, so a forged record cannot be told from the simulator's: "
+                    f"copy {KEY_FILE} from the original folder, or set {TRUST_ENV}=1 "
+                    "(analyze --trust-unkeyed) to read it unchecked")
+            unkeyed = True
+            warnings.warn(BagReadWarning(f"{path}: {UNKEYED} ({TRUST_ENV}): its movements' "
+                                         "signatures are not checked"), stacklevel=2)
         verdict = validator.admit(name, message, record.timestamp_ns)
         if not verdict.ok:
             continue
