@@ -105,10 +105,9 @@ SERVICE_WAIT = 5.0  # seconds a command waits for its service to be discovered
 ANSWER_POLL = 0.2  # seconds between an HTTP thread's looks at whether the run is gone
 
 DEMONSTRATIONS, READY = publishes("demonstrations"), serves("teacher_ready")
-MOVEMENTS, STATUS = subscribes("movements"), subscribes("run_status")
-PACE_STATE = subscribes("pace_state")
+STATUS, PACE_STATE = subscribes("run_status"), subscribes("pace_state")
 EXECUTE, PACE = calls("execute_action"), calls("pace")
-INTERFACES = declared(DEMONSTRATIONS, READY, MOVEMENTS, STATUS, PACE_STATE, EXECUTE, PACE,
+INTERFACES = declared(DEMONSTRATIONS, READY, STATUS, PACE_STATE, EXECUTE, PACE,
                       PICTURE_INTERFACES, WEB_EXPERT_INTERFACES)
 
 
@@ -133,9 +132,10 @@ class WebTeacherNode(Node, Api):
         self._waiting: list[tuple[Any, ThreadFuture, float]] = []  # for their service
         self._later: list[tuple[float, PacePlan, Request, ThreadFuture]] = []  # pace calls
         self._demos = DEMONSTRATIONS.create(self)
-        follow(self, self.app.picture, self.app.lock)
+        # Movements reach the page only through the picture's checks (signed, in the count).
+        followed = follow(self, self.app.picture, self.app.lock, also=self._on_movement)
         # The arbiter starts once these have matched (sgim_ros/ready.py).
-        serve_ready(self, READY, {"movements": MOVEMENTS.create(self, self._on_movement),
+        serve_ready(self, READY, {"movements": followed["movements"],
                                   "run_status": STATUS.create(self, self._on_status)})
         PACE_STATE.create(self, self._on_pace)
         self.expert = WebExpert(self, self.app.say) if p["expert"] else None
@@ -163,8 +163,7 @@ class WebTeacherNode(Node, Api):
     # --- what the graph says -------------------------------------------------------------
 
     def _on_movement(self, msg: Movement) -> None:
-        if msg.process == Movement.PROCESS_EVALUATION:
-            return
+        """A movement the picture's checks admitted (follow)."""
         with self.app.lock:
             problem = self.app.learner.add_movement(
                 msg.index, msg.status == Movement.STATUS_OK, msg.action, msg.outcome)

@@ -48,3 +48,52 @@ def test_requests_after_the_context_is_shut_down_get_a_clean_503(rclpy_context):
                                                                     "message": RUN_OVER})
     finally:
         node.destroy_node()
+
+
+def test_the_page_takes_only_movements_the_run_signed(rclpy_context, monkeypatch):
+    """A forged movement (unsigned, a huge index) reaches neither the page's count nor its
+    picture, so it is never offered as a demonstration; the simulator's next one is."""
+    import numpy as np
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+    from rclpy.parameter import Parameter
+
+    from sgim_msgs.msg import Movement
+    from sgim_ros import qos, record_key
+    from teacher.web_teacher_node import WebTeacherNode
+
+    key = record_key.new_key()
+    monkeypatch.setenv(record_key.ENV, key)  # what the launcher gives every node
+    node = WebTeacherNode(context=rclpy_context, parameter_overrides=[
+        Parameter("port", value=0), Parameter("render_casts", value=False)])
+    rogue = Node("rogue", context=rclpy_context)
+    executor = SingleThreadedExecutor(context=rclpy_context)
+    executor.add_node(node)
+    executor.add_node(rogue)
+    try:
+        out = rogue.create_publisher(Movement, "/movements", qos.RECORDS)
+
+        def movement(index: int, outcome: tuple[float, float]) -> Movement:
+            return Movement(index=index, process=Movement.PROCESS_EXPLORATION,
+                            status=Movement.STATUS_OK, action=np.zeros(24).tolist(),
+                            outcome=list(outcome), goal=[0.0, 0.0], goal_index=1)
+
+        real = movement(1, (0.2, -0.3))
+        real.signature = list(record_key.movement_signature(key, real))
+        deadline = time.monotonic() + 30
+        while out.get_subscription_count() < 1 and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.1)
+        out.publish(movement(10**15, (-0.05, -0.95)))  # forged: no signature
+        out.publish(real)
+        while node.app.learner.movement_count < 1 and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.1)
+        for _ in range(10):  # anything else still on its way
+            executor.spin_once(timeout_sec=0.05)
+        status, state = _ask(node.server.port, "GET", "/api/state?landings=10")
+        assert status == 200 and state["count"] == 1
+        assert node.app.learner.movement_count == 1 and node.app.learner.indices == [1]
+        assert node.app.picture.landings == 1
+    finally:
+        executor.shutdown()
+        rogue.destroy_node()
+        node.destroy_node()

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import contextlib
 import threading
+from collections.abc import Callable
+from typing import Any
 
 from rclpy.node import Node
 
@@ -20,6 +22,8 @@ from sgim_msgs.msg import (
     RegionMap,
     RunStatus,
 )
+from sgim_nodes.bag.record_checks import Limits
+from sgim_nodes.bag.validation import LiveGate
 from sgim_nodes.core.teaching import DEFAULT_TOLERANCE_NOISE, MEANS_AND_GOAL
 from sgim_nodes.view.picture import DemonstrationSeen, Leaf, LivePicture
 from sgim_ros.interfaces import subscribes
@@ -50,13 +54,20 @@ RUN_STATES = {RunStatus.STATE_RUNNING: "running", RunStatus.STATE_FINISHED: "fin
               RunStatus.STATE_ABORTED: "aborted"}
 
 
-def follow(node: Node, picture: LivePicture, lock: threading.Lock | None = None) -> None:
-    """Subscribe ``node`` to every topic the picture shows."""
+def follow(node: Node, picture: LivePicture, lock: threading.Lock | None = None,
+           also: Callable[[Movement], None] | None = None) -> dict[str, Any]:
+    """Subscribe ``node`` to every topic the picture shows; return the subscriptions by topic.
+    A movement is shown only once the run's checks admit it (signature, size, its place in
+    the count: bag/validation.py's LiveGate, refusals logged), then handed to ``also``."""
     guard = lock if lock is not None else contextlib.nullcontext()
+    gate = LiveGate(node.get_logger().warning, Limits())
+    gate.movements.resync()  # the first valid movement sets the count (a resumed run)
 
     def on_movement(msg: Movement) -> None:
-        if msg.process == Movement.PROCESS_EVALUATION:
+        if msg.process == Movement.PROCESS_EVALUATION or not gate.admit_movement(msg).ok:
             return
+        if also is not None:
+            also(msg)
         with guard:
             picture.add_movement(msg.index, msg.process, msg.status == Movement.STATUS_OK,
                                  msg.outcome, msg.goal)
@@ -89,5 +100,5 @@ def follow(node: Node, picture: LivePicture, lock: threading.Lock | None = None)
                                RUN_STATES.get(msg.state, "running"), msg.message)
 
     callbacks = (on_movement, on_regions, on_goal, on_evaluation, on_demonstration, on_status)
-    for endpoint, callback in zip(PICTURE_INTERFACES, callbacks, strict=True):
-        endpoint.create(node, callback)
+    return {endpoint.name: endpoint.create(node, callback)
+            for endpoint, callback in zip(PICTURE_INTERFACES, callbacks, strict=True)}
