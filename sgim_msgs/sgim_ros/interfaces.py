@@ -6,7 +6,8 @@ make an endpoint its declaration does not name. A helper that creates endpoints 
 (SimClient, MovementMemory, PaceControl...) declares them as a constant that the node's
 INTERFACES includes. The graph description, the arbiter's start, the recorder and
 docs/reference.md read the declarations; tests/docs/test_reference.py builds every node and
-checks that it made exactly what it declares.
+checks that it made exactly what it declares. A publisher of a record that teaches the learner
+signs each record it sends (SigningPublisher).
 
 The tables below type every topic, service and action of the graph once, so a node declares
 only a name and the condition under which it has it. Nothing here imports rclpy until an
@@ -156,7 +157,12 @@ class Endpoint:
             raise UnknownEndpoint(f"{actual!r} is not the declared {self.kind} {self.name!r}")
         kind = self.interface()
         if self.kind == "publishes":
-            return node.create_publisher(kind, actual, topic_qos(actual), **options)
+            publisher = node.create_publisher(kind, actual, topic_qos(actual), **options)
+            from sgim_ros import record_key
+
+            if _last(actual) in record_key.TEACHING_TOPICS:
+                return SigningPublisher(publisher, _last(actual), record_key.from_environment())
+            return publisher
         if self.kind == "subscribes":
             return node.create_subscription(kind, actual, callback,
                                             topic_qos(actual, keep_all=self.keep_all),
@@ -170,6 +176,23 @@ class Endpoint:
         if self.kind == "action server":
             return ActionServer(node, kind, actual, execute_callback=callback, **options)
         return ActionClient(node, kind, actual, **options)
+
+
+class SigningPublisher:
+    """A publisher of records that teach the learner: each is signed with the run's key
+    before it goes out (sgim_ros/record_key.py), whoever publishes it; unsigned when the node
+    has no key (started alone). Everything else is the rclpy publisher's."""
+
+    def __init__(self, publisher: Any, topic: str, key: str) -> None:
+        self._publisher, self._topic, self._key = publisher, topic, key
+
+    def publish(self, msg: Any) -> None:
+        from sgim_ros.record_key import sign_teaching
+
+        self._publisher.publish(sign_teaching(self._topic, msg, self._key))
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._publisher, name)
 
 
 def publishes(name: str, when: str = "") -> Endpoint:

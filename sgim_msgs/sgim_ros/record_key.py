@@ -1,4 +1,4 @@
-"""Movements signed by the run's simulator, so that no other publisher can pass for it.
+"""Records signed by the run's nodes, so that no other publisher can pass for them.
 
 Why: the graph's records travel on a DDS domain any process may publish on, and a well-formed
 forged Movement (a "re-execution" of the latest index with attempt 1, or a record that comes
@@ -8,10 +8,17 @@ its nodes in the environment (never as a ROS parameter: any process on the domai
 those), and the simulator signs every Movement with it: HMAC-SHA256 over the fields that make
 the movement, the first 16 bytes in `Movement.signature`. Every consumer checks the signature
 (bag/record_checks.py) and quarantines a record that lacks it or whose signature is wrong; the
-bag readers take the key from the run's folder. A run made without a key (an older bag, a node
-started alone) is read as before; a folder whose movements are signed but whose key is gone
-(copied without it) is refused, since without the key a forgery reads like the simulator's
-record, unless SGIM_TRUST_UNKEYED=1 (`analyze --trust-unkeyed`) says to read it unchecked.
+bag readers take the key from the run's folder. What teaches the learner is signed the same
+way by the node that makes it: a teacher's demonstration (`demonstrations`, signed by the
+teacher, expert, human or web node), the arbiter's `demonstrations_taken` and its help
+requests; each under its topic's name, so that one cannot be replayed as another. A teacher
+node started by hand for a run (teacher "external") signs with the key of the run's folder,
+given in SGIM_RECORD_KEY.
+
+A run made without a key (an older bag, a node started alone) is read as before; a folder
+whose movements are signed but whose key is gone (copied without it) is refused, since
+without the key a forgery reads like the simulator's record, unless SGIM_TRUST_UNKEYED=1
+(`analyze --trust-unkeyed`) says to read it unchecked.
 """
 
 from __future__ import annotations
@@ -29,6 +36,11 @@ import numpy as np
 ENV = "SGIM_RECORD_KEY"
 KEY_FILE = "record.key"
 SIGNATURE_BYTES = 16
+# What a run's records carry (Limits.signing, kept in each bag): a bag recorded before the
+# teaching records were signed has their signatures empty, and is read as it was made.
+SIGNS_MOVEMENTS = 1
+SIGNS_TEACHING = 2
+TEACHING_TOPICS = ("demonstrations", "demonstrations_taken", "help_requests")
 TRUST_ENV = "SGIM_TRUST_UNKEYED"
 UNKEYED = "read without its record key"  # how a trusted keyless run is named in reports
 
@@ -81,6 +93,42 @@ def movement_signature(key: str, movement: Any) -> bytes:
     body = (head + _floats(movement.action) + _floats(movement.outcome)
             + _floats(getattr(movement, "goal", ())))
     return hmac.new(bytes.fromhex(key), body, hashlib.sha256).digest()[:SIGNATURE_BYTES]
+
+
+def _text(value: Any) -> bytes:
+    data = str(value).encode("utf-8")
+    return struct.pack("<I", len(data)) + data
+
+
+def teaching_signature(key: str, topic: str, record: Any) -> bytes:
+    """The signature of a Demonstration-like (``demonstrations``, ``demonstrations_taken``)
+    or HelpRequest-like (``help_requests``) record, fields read by name."""
+    if topic == "help_requests":
+        body = (struct.pack("<IQ", int(record.index), int(record.movement_index))
+                + _floats(record.goal) + _text(record.teacher) + _text(record.content))
+    elif topic in ("demonstrations", "demonstrations_taken"):
+        body = (struct.pack("<IQiI", int(record.index), int(record.movement_index),
+                            int(record.teaching_set_index), int(record.help_request))
+                + _floats(record.action) + _floats(record.outcome) + _text(record.source)
+                + _text(record.content))
+    else:
+        raise ValueError(f"no signature is defined for {topic!r} records")
+    return hmac.new(bytes.fromhex(key), _text(topic) + body,
+                    hashlib.sha256).digest()[:SIGNATURE_BYTES]
+
+
+def sign_teaching(topic: str, record: Any, key: str | None = None) -> Any:
+    """Sign ``record`` of ``topic`` in place with ``key`` (the run's, from the environment,
+    by default) and return it; left unsigned when there is no key (a node started alone)."""
+    key = from_environment() if key is None else key
+    if key:
+        record.signature = list(teaching_signature(key, topic, record))
+    return record
+
+
+def teaching_signed_by(key: str, topic: str, record: Any) -> bool:
+    """Whether the record carries the signature the run's node gives it."""
+    return hmac.compare_digest(signature_of(record), teaching_signature(key, topic, record))
 
 
 def signature_of(movement: Any) -> bytes:

@@ -24,7 +24,8 @@ import numpy as np
 from rclpy.node import Node
 
 from sgim_msgs.msg import Demonstration, Goal, HelpRequest
-from sgim_nodes.bag.record_checks import expert_source
+from sgim_nodes.bag.record_checks import Limits, expert_source
+from sgim_nodes.bag.validation import LiveGate
 from sgim_nodes.core.teaching import GOAL_ONLY, MEANS_AND_GOAL
 from sgim_ros.interfaces import serves, subscribes
 from sgim_ros.ready import serve_ready
@@ -53,6 +54,8 @@ class WebExpert:
         self.node, self.name, self.say = node, WEB_EXPERT, say
         self.source = expert_source(WEB_EXPERT)
         self.open: list[HelpRequest] = []
+        # The learner's requests are signed by its arbiter: a forged one is never shown.
+        self.gate = LiveGate(node.get_logger().warning, Limits())
         self.answered: set[int] = set()
         requests = REQUESTS.create(node, self._on_request)
         GOALS.create(node, self._on_goal)
@@ -63,7 +66,9 @@ class WebExpert:
             self.say(episode_line(goal), "info")
 
     def _on_request(self, msg: HelpRequest) -> None:
-        if msg.teacher != self.name or msg.index in self.answered or any(
+        if msg.teacher != self.name or self.gate.check("help_requests", msg):
+            return
+        if msg.index in self.answered or any(
                 r.index == msg.index for r in self.open):
             return
         self.open.append(msg)

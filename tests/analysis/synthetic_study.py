@@ -190,13 +190,14 @@ def acts_records(episodes: list[tuple[int, str, str, bool]]) -> dict[int, list]:
         content = "means-and-goal" if kind == "mimicry" else "goal-only"
         records.append(("help_requests", T["sgim_msgs/msg/HelpRequest"](
             stamp=stamp(count), index=requests, movement_index=count, goal=point,
-            teacher=teacher, content=content)))
+            teacher=teacher, content=content, signature=np.zeros(0, dtype=np.uint8))))
         shown = answered and kind == "mimicry"
         answer = T["sgim_msgs/msg/Demonstration"](
             stamp=stamp(count), index=requests, movement_index=count,
             action=np.zeros(24) if shown else np.zeros(0),
             outcome=point if answered else np.zeros(0), teaching_set_index=0,
-            source=f"expert:{teacher}", content=content, help_request=requests)
+            source=f"expert:{teacher}", content=content, help_request=requests,
+            signature=np.zeros(0, dtype=np.uint8))
         records.append(("demonstrations", answer))
         if answered:
             records.append(("demonstrations_taken", answer))
@@ -210,6 +211,6 @@ def demonstrations_at(counts: list[int]) -> dict[int, list]:
         demo = T["sgim_msgs/msg/Demonstration"](
             stamp=stamp(count), index=k, movement_index=count, action=np.zeros(24),
             outcome=np.asarray(OUTSIDE), teaching_set_index=k, source="automatic",
-            content="means-and-goal", help_request=0)
+            content="means-and-goal", help_request=0, signature=np.zeros(0, dtype=np.uint8))
         out[count] = [("demonstrations", demo), ("demonstrations_taken", demo)]
     return out

@@ -89,7 +89,8 @@ def old_run(store: Typestore, n: int = 12, seed: int = 4) -> list[tuple[str, obj
     demo = make("sgim_msgs/msg/Demonstration", stamp=stamp(0), index=1, movement_index=n // 2,
                 action=rng.uniform(-1, 1, 24), outcome=rng.uniform(-1, 1, 2),
                 teaching_set_index=3, source="automatic", giver="automatic",
-                content="means-and-goal", help_request=0)
+                content="means-and-goal", help_request=0,
+                signature=np.zeros(0, dtype=np.uint8))
     region = make("sgim_msgs/msg/Region", id=0, parent_id=-1, lower=np.array([-1.0, -1.0]),
                   upper=np.array([1.0, 1.0]), interest=0.25, goal_count=2, is_leaf=True,
                   least_competent_goal=np.zeros(0))

@@ -75,7 +75,7 @@ def demonstration(index: int, movement_index: int, rng: np.random.Generator,
         action=np.zeros(0) if content == "goal-only" else action,
         outcome=np.zeros(0) if content == "means-only" else outcome,
         teaching_set_index=index + 4, source="automatic", content=content,
-        help_request=help_request)
+        help_request=help_request, signature=np.zeros(0, dtype=np.uint8))
 
 
 def help_request(index: int, movement_index: int, rng: np.random.Generator,
@@ -83,7 +83,8 @@ def help_request(index: int, movement_index: int, rng: np.random.Generator,
     return T["sgim_msgs/msg/HelpRequest"](stamp=stamp(29), index=index,
                                           movement_index=movement_index,
                                           goal=rng.uniform(-1, 1, 2), teacher=teacher,
-                                          content=content)
+                                          content=content,
+                                          signature=np.zeros(0, dtype=np.uint8))
 
 
 TEACHING_ENTRIES = 8  # a turn's checks: a teaching set no smaller than any test's limits

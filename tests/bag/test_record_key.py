@@ -4,6 +4,7 @@ takes (sgim_ros/record_key.py, bag/record_checks.py)."""
 from __future__ import annotations
 
 import dataclasses
+import json
 import stat
 
 import numpy as np
@@ -119,3 +120,70 @@ def test_an_unsigned_run_without_a_key_is_read_as_before(tmp_path, monkeypatch):
     monkeypatch.delenv(record_key.TRUST_ENV, raising=False)
     samples.write_bag(tmp_path / "bag", samples.synthetic_run(20, seed=1))
     assert len(load_run(tmp_path / "bag").movements) == 20
+
+
+def test_teaching_records_are_signed_under_their_topic_and_checked_when_the_run_signs_them(
+        monkeypatch):
+    """A teacher's demonstration, the arbiter's taken one and its help request: a forgery, a
+    change, or one replayed under another topic is quarantined as unsigned; a bag recorded
+    before teaching records were signed is read as it was made."""
+    from tests.bag import samples
+
+    key = record_key.new_key()
+    rng = np.random.default_rng(2)
+    limits = Limits(record_key=key)
+    assert limits.signing == record_key.SIGNS_TEACHING
+    demo = record_key.sign_teaching("demonstrations", samples.demonstration(3, 40, rng), key)
+    ask = record_key.sign_teaching("help_requests",
+                                   samples.help_request(2, 40, rng, "centre", "goal-only"), key)
+    assert check("demonstrations", demo, limits) is None
+    assert check("help_requests", ask, limits) is None
+    as_taken = check("demonstrations_taken", demo, limits)  # the giver's, not the arbiter's
+    assert as_taken is not None and as_taken.kind == "unsigned"
+    for forged in (dataclasses.replace(demo, signature=np.zeros(0, dtype=np.uint8)),
+                   dataclasses.replace(demo, outcome=np.array([0.9, 0.9])),
+                   dataclasses.replace(demo, source="human")):
+        problem = check("demonstrations", forged, limits)
+        assert problem is not None and problem.kind == "unsigned", forged
+    moved = dataclasses.replace(ask, goal=np.array([0.5, 0.5]))
+    assert check("help_requests", moved, limits).kind == "unsigned"
+    unsigned = dataclasses.replace(demo, signature=np.zeros(0, dtype=np.uint8))
+    older = Limits.from_json(json.dumps({"action_size": 24, "outcome_size": 2}))
+    assert older.signing == record_key.SIGNS_MOVEMENTS
+    older = dataclasses.replace(older, record_key=key)
+    assert check("demonstrations", unsigned, older) is None  # recorded before: as made
+    assert Limits.from_json(limits.to_json()).signing == record_key.SIGNS_TEACHING
+    assert check("demonstrations", unsigned, Limits(record_key="")) is None  # keyless run
+
+
+def test_a_teaching_publisher_signs_what_any_node_publishes(monkeypatch):
+    """A node makes its teaching publishers from their declarations, which sign each record
+    with the run's key: no publishing site can forget it."""
+    from sgim_ros.interfaces import publishes
+
+    sent = []
+
+    class Publisher:
+        def publish(self, msg):
+            sent.append(msg)
+
+        def get_subscription_count(self):
+            return 3
+
+    class FakeNode:
+        def create_publisher(self, kind, name, qos, **options):
+            return Publisher()
+
+    key = record_key.new_key()
+    monkeypatch.setenv(record_key.ENV, key)
+    from sgim_msgs.msg import Demonstration, HelpRequest, Movement
+
+    publisher = publishes("/demonstrations").create(FakeNode())
+    assert publisher.get_subscription_count() == 3  # the rest is rclpy's publisher
+    publisher.publish(Demonstration(index=4, movement_index=9, source="expert:centre"))
+    assert record_key.teaching_signed_by(key, "demonstrations", sent[-1])
+    publishes("movements").create(FakeNode()).publish(Movement(index=1))
+    assert bytes(sent[-1].signature) == b""  # movements are the simulator's to sign
+    monkeypatch.delenv(record_key.ENV)
+    publishes("help_requests").create(FakeNode()).publish(HelpRequest(index=1))
+    assert bytes(sent[-1].signature) == b""  # a node started alone signs nothing

@@ -132,10 +132,12 @@ def test_an_interrupted_run_resumes_from_its_recording_to_the_same_final_count(
     # The arbiter and the recorder hear the word; the run has started.
     assert client.spin_until(lambda: words.get_subscription_count() >= 2 and status,
                              timeout=180)
-    words.publish(Demonstration(stamp=client.node.get_clock().now().to_msg(),
-                                movement_index=0, teaching_set_index=-1,
-                                source="automatic"))  # the teacher's "nothing to show"
     cut = tmp_path / "cut"
+    from sgim_ros.record_key import read_key, sign_teaching
+
+    words.publish(sign_teaching("demonstrations", Demonstration(  # signed as the teacher signs
+        stamp=client.node.get_clock().now().to_msg(), movement_index=0, teaching_set_index=-1,
+        source="automatic"), read_key(cut)))  # the teacher's "nothing to show"
 
     deadline = time.monotonic() + 300
     while recorded_movements(cut / "bag") < 100:

@@ -480,9 +480,13 @@ def test_a_demonstration_mid_goal_is_handled_at_the_next_movement_boundary(
         lambda: len(seen) > 40 and seen[-1].process == Movement.PROCESS_GOAL_DIRECTED
         and publisher.get_subscription_count() >= 2, timeout=120)
     sent_after = seen[-1].index
-    publisher.publish(Demonstration(
+    from sgim_ros.record_key import read_key, sign_teaching
+
+    key = read_key(tmp_path / "sgim-d")  # an external teacher signs with the run's key
+    assert key
+    publisher.publish(sign_teaching("demonstrations", Demonstration(
         index=1, movement_index=sent_after, action=teaching.actions[0].tolist(),
-        outcome=teaching.outcomes[0].tolist(), teaching_set_index=0, source="human"))
+        outcome=teaching.outcomes[0].tolist(), teaching_set_index=0, source="human"), key))
     # Closing before every reader acknowledged it could lose it (seen once under load: the
     # run went on without a demonstration).
     assert publisher.wait_for_all_acked(Duration(seconds=30))

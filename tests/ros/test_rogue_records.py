@@ -61,6 +61,10 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     teaching = load_teaching_set()
     assert client.spin_until(lambda: len(seen) >= 40, timeout=180)
+    from sgim_ros.record_key import read_key, sign_teaching, signed_by
+
+    key = read_key(tmp_path / "rogue")
+    assert key, "the launcher keeps the run's record key in its folder"
     rng = np.random.default_rng(0)
     good_action, good_outcome = teaching.actions[1], teaching.outcomes[1]
 
@@ -82,13 +86,12 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
     for k in range(latest + 1, latest + 31):
         movements.publish(Movement(index=k, process=0, status=0, action=[0.0] * 24,
                                    outcome=[float("nan"), float("nan")]))
-    # Forged re-executions (issue 31): the latest real movement again with attempt 1 and
-    # another outcome, right after it, five times; only the run's simulator can sign one.
-    from sgim_ros.record_key import read_key, signed_by
-
-    key = read_key(tmp_path / "rogue")
-    assert key, "the launcher keeps the run's record key in its folder"
-
+    # Well-formed demonstrations no teacher of the run signed (forged answers).
+    for k in range(3):
+        demos.publish(_demo(500 + k, good_action, good_outcome, teaching_index=1,
+                            movement_index=latest))
+    # Forged re-executions: the latest real movement again with attempt 1 and another
+    # outcome, right after it, five times; only the run's simulator can sign one.
     def simulators() -> list[Movement]:  # what the run's simulator published (signed)
         return [m for m in seen if signed_by(key, m)]
 
@@ -113,15 +116,17 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
     if rogue.wait_for_server(timeout_sec=5):
         rogue.send_goal_async(ReachGoal.Goal(max_movements=5, movements_before=5))
     client.spin_for(1.0)
-    # A burst of valid demonstrations: more than the budget can hold.
+    # A burst of valid demonstrations (an external teacher signs with the run's key): more
+    # than the budget can hold.
     for k in range(BURST):
         entry = k % len(teaching.actions)
-        demos.publish(_demo(10 + k, teaching.actions[entry], teaching.outcomes[entry],
-                            teaching_index=entry, movement_index=latest))
+        demos.publish(sign_teaching("demonstrations", _demo(
+            10 + k, teaching.actions[entry], teaching.outcomes[entry], teaching_index=entry,
+            movement_index=latest), key))
     # A late demonstration: once the budget is spent, while the final evaluation runs.
     assert client.spin_until(lambda: any(m.index == MOVEMENTS for m in seen), timeout=300)
-    demos.publish(_demo(999, good_action, good_outcome, teaching_index=1,
-                        movement_index=MOVEMENTS))
+    demos.publish(sign_teaching("demonstrations", _demo(
+        999, good_action, good_outcome, teaching_index=1, movement_index=MOVEMENTS), key))
     client.spin_until(lambda: statuses and statuses[-1].state != RunStatus.STATE_RUNNING, 120)
     client.close()
     output, _ = child.communicate(timeout=300)
@@ -179,6 +184,7 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
     assert q["demonstrations"]["non-finite"] == 2 and q["demonstrations"]["size"] == 1
     assert q["demonstrations"]["out-of-bounds"] == 1
     assert q["demonstrations"]["unknown-teaching-index"] == 2
+    assert q["demonstrations"]["unsigned"] == 3  # the forged answers, never taken
     assert q["competences"] == {"non-finite": 1, "out-of-bounds": 1, "size": 1}
     meta = yaml.safe_load((run_dir / "metadata.yaml").read_text())  # counted there too
     assert meta["outcome"] == "finished" and meta["quarantine"] == {

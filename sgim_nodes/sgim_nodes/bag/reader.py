@@ -39,6 +39,7 @@ from sgim_nodes.bag.validation import RunValidator, summarise
 from sgim_nodes.bag.writer import STAGING_PREFIX
 from sgim_ros.record_key import (
     KEY_FILE,
+    SIGNS_MOVEMENTS,
     TRUST_ENV,
     UNKEYED,
     MissingKey,
@@ -269,7 +270,8 @@ def _limits_for(bag: Path) -> Limits:
                 warnings.warn(BagReadWarning(f"{params} is unreadable ({error}): validating "
                                              "with the default limits"), stacklevel=2)
             break
-    return Limits(teaching_set_size=teaching_set_size())
+    # No word from the recorder: the older rule, under which only movements were signed.
+    return Limits(teaching_set_size=teaching_set_size(), signing=SIGNS_MOVEMENTS)
 
 
 def load_run(path: str | Path, topics: Iterable[str] | None = None,

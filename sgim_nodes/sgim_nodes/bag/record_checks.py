@@ -31,6 +31,7 @@ from sgim_nodes.core.teaching import (
     TEACHER_CHOICES,
 )
 from sgim_ros import record_key
+from sgim_ros.record_key import SIGNS_MOVEMENTS, SIGNS_TEACHING
 
 BOUND = 1.0  # actions, outcomes, goals and regions live in [-1, 1]^n
 # Processes and statuses a published Movement may carry: the evaluator's and a human's
@@ -78,6 +79,9 @@ class Limits:
     teaching_set_size: int = 0
     record_key: str = field(default_factory=record_key.from_environment, repr=False,
                             compare=False)
+    # Which records the run signs (sgim_ros/record_key.py): today's nodes sign the teaching
+    # records too; a bag that does not say so was recorded when only movements were signed.
+    signing: int = SIGNS_TEACHING
 
     def to_json(self) -> str:
         values = asdict(self)
@@ -86,7 +90,7 @@ class Limits:
 
     @classmethod
     def from_json(cls, text: str) -> Limits:
-        values = json.loads(text)
+        values = {"signing": SIGNS_MOVEMENTS, **json.loads(text)}
         return cls(**{k: int(v) for k, v in values.items()
                       if k in cls.__dataclass_fields__ and k != "record_key"})
 
@@ -96,7 +100,8 @@ class Limits:
         return cls(action_size=int(params.get("action_size", 24)),
                    outcome_size=int(params.get("outcome_size", 2)),
                    budget=int(params.get("movements", 0) or 0),
-                   teaching_set_size=teaching_set_size(params.get("teaching_set", "") or None))
+                   teaching_set_size=teaching_set_size(params.get("teaching_set", "") or None),
+                   signing=SIGNS_MOVEMENTS)  # a reader's guess: the older rule
 
 
 def teaching_set_size(path: str | None = None) -> int:
@@ -457,6 +462,18 @@ def check(topic: str, record: Any, limits: Limits) -> Problem | None:
     if checker is None:
         return None
     try:
-        return checker(record, limits)
+        return checker(record, limits) or teaching_signature_problem(name, record, limits)
     except (AttributeError, TypeError, ValueError, OverflowError) as error:
         return Problem("bad-value", f"unreadable {name} record: {error}")
+
+
+def teaching_signature_problem(name: str, record: Any, limits: Limits) -> Problem | None:
+    """A record that teaches the learner, in a run that signs them, must carry the signature
+    of the run's node that made it: no other publisher can make one."""
+    if (not limits.record_key or limits.signing < SIGNS_TEACHING
+            or name not in record_key.TEACHING_TOPICS):
+        return None
+    if record_key.teaching_signed_by(limits.record_key, name, record):
+        return None
+    return Problem("unsigned", f"{name} record {int(record.index)} is not signed by "
+                               "the run's node that makes it")

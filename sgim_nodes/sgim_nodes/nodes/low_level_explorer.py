@@ -42,6 +42,7 @@ from __future__ import annotations
 from sgim_msgs.action import ReachGoal
 from sgim_msgs.msg import Competence
 from sgim_msgs.srv import ChooseGoal, ExecuteAction, RegisterDemonstration
+from sgim_nodes.bag.record_checks import teaching_signature_problem
 from sgim_nodes.bag.resume import resume_point
 from sgim_nodes.core.competence import start_distance
 from sgim_nodes.core.environment import MovementResult
@@ -113,6 +114,12 @@ class LowLevelExplorer(AsyncNode):
     def _register(self, request: RegisterDemonstration.Request,
                   response: RegisterDemonstration.Response):
         demo = request.demonstration
+        # The arbiter checked it; it must still be a teacher's of this run (signed).
+        problem = teaching_signature_problem("demonstrations", demo, self.memory.gate.limits)
+        if problem is not None:
+            response.accepted, response.message = False, problem.detail
+            self.get_logger().error(f"refused demonstration {demo.index}: {problem.detail}")
+            return response
         outcome = vec(demo.outcome)
         # Only an outcome the memory will take is measured: a NaN one stopped the nearest-
         # neighbour search, and the node, once the memory held a tree (found by fuzzing).

@@ -88,6 +88,8 @@ def follow(node: Node, picture: LivePicture, lock: threading.Lock | None = None,
             picture.add_evaluation(msg.movement_index, msg.mean_distance)
 
     def on_demonstration(msg: Demonstration) -> None:
+        if gate.check("demonstrations", msg):  # forged or malformed: not shown
+            return
         with guard:
             picture.add_demonstration(DemonstrationSeen(
                 int(msg.index), int(msg.movement_index), tuple(float(v) for v in msg.outcome),
