@@ -19,7 +19,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from sgim_nodes.bag.record_checks import Limits
+from sgim_nodes.bag.record_checks import Limits, check
 from sgim_nodes.bag.validation import LiveGate, RunValidator
 from tests.fuzz.tally import fuzz, tally
 
@@ -170,3 +170,57 @@ def test_every_record_is_accepted_or_quarantined_never_an_exception(stream):
             refused += 1
             tally(f"records: {topic}", f"quarantined ({verdict.problem.kind})")
     assert len(validator.quarantined) == refused  # every refusal is in the report
+
+
+SIGNED_FIELDS = {"movements": ("index", "attempt", "process", "status", "goal_index", "action",
+                               "outcome", "goal"),
+                 "demonstrations": ("index", "movement_index", "teaching_set_index",
+                                    "help_request", "action", "outcome", "source", "content"),
+                 "help_requests": ("index", "movement_index", "goal", "teacher", "content")}
+SIGNED_FIELDS["demonstrations_taken"] = SIGNED_FIELDS["demonstrations"]
+
+
+def _changed(value):
+    """Another value of the same kind: what a forger changes in a signed record."""
+    if isinstance(value, str):
+        return value + "x"
+    if isinstance(value, int | np.integer):
+        return int(value) + 1
+    values = [float(v) for v in value]
+    if not values:
+        return [0.5]
+    last = values[-1]
+    return [*values[:-1], last + 0.125 if not last > 0.5 else last - 0.125]
+
+
+@pytest.mark.slow
+@fuzz(300)
+@given(topic=st.sampled_from(sorted(SIGNED_FIELDS)), data=st.data())
+def test_a_signed_record_changed_in_any_field_is_never_accepted(topic, data):
+    """In a run with a key, a record its maker signed passes the signature check; the same
+    record with any signed field changed, or with random signature bytes, is quarantined."""
+    from sgim_ros import record_key
+
+    key = record_key.new_key()
+    limits = Limits(action_size=24, outcome_size=2, budget=50, teaching_set_size=26,
+                    record_key=key)
+    r = data.draw(GOOD[topic])
+    if topic == "help_requests":  # the fields a graph of today fills
+        r.teacher, r.content = data.draw(st.sampled_from([("", ""), ("centre", "goal-only")]))
+    if topic == "movements":
+        r.signature = list(record_key.movement_signature(key, r))
+    else:
+        record_key.sign_teaching(topic, r, key)
+    first = check(topic, r, limits)
+    assert first is None or first.kind != "unsigned"
+    name = data.draw(st.sampled_from(SIGNED_FIELDS[topic]))
+    forged = SimpleNamespace(**vars(r))
+    setattr(forged, name, _changed(getattr(r, name)))
+    problem = check(topic, forged, limits)
+    assert problem is not None
+    tally(f"signed records: {topic}", f"one field changed: quarantined ({problem.kind})")
+    noise = SimpleNamespace(**vars(r))
+    noise.signature = data.draw(st.lists(st.integers(0, 255), max_size=20))
+    if bytes(noise.signature) != bytes(bytearray(r.signature)):
+        assert check(topic, noise, limits) is not None
+        tally(f"signed records: {topic}", "random signature: quarantined")
