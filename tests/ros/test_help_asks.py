@@ -67,7 +67,9 @@ def _resumed(ask_goal):
     imitation = SimpleNamespace(goal_index=0, movement_index=33, competence=-0.9, goal=[1, 1])
     records = SimpleNamespace(help_requests=[ask, SimpleNamespace(movement_index=60, goal=[])],
                               competences=[*own, imitation])
-    asks.resume(records, 50)  # the ask at 60 is after the resumed count
+    from sgim_nodes.nodes.help_asks import resume_schedule
+
+    resume_schedule(asks.schedule, records, 50, [])  # the ask at 60 is after the count
     return asks
 
 
