@@ -26,6 +26,7 @@ from __future__ import annotations
 import hashlib
 import hmac
 import os
+import re
 import secrets
 import struct
 from pathlib import Path
@@ -41,6 +42,10 @@ SIGNATURE_BYTES = 16
 SIGNS_MOVEMENTS = 1
 SIGNS_TEACHING = 2
 TEACHING_TOPICS = ("demonstrations", "demonstrations_taken", "help_requests")
+# What the simulator logs when it executes a movement again for a client that got no answer:
+# a signed re-execution its log does not show was made by another holder of the key.
+REEXECUTION_LOG = "re-executed movement {index} (attempt {attempt})"
+REEXECUTION_PATTERN = re.compile(r"re-executed movement (\d+) \(attempt (\d+)\)")
 TRUST_ENV = "SGIM_TRUST_UNKEYED"
 UNKEYED = "read without its record key"  # how a trusted keyless run is named in reports
 

@@ -24,7 +24,7 @@ from sgim_msgs.srv import ExecuteAction
 from sgim_ros.entry import run_node
 from sgim_ros.interfaces import declared, publishes, serves
 from sgim_ros.params import Bounds, Param, declare, non_negative, seed_range
-from sgim_ros.record_key import from_environment, movement_signature
+from sgim_ros.record_key import REEXECUTION_LOG, from_environment, movement_signature
 from sim_bridge.fishing_world import DEFAULT_NOISE, DEFAULT_TIME_STEP, FishingWorld
 from sim_bridge.noise_cursor import NoiseCursor
 
@@ -109,6 +109,10 @@ class SimBridgeNode(Node):
             )
             if self._key:  # the run's proof that this simulator made the record
                 movement.signature = list(movement_signature(self._key, movement))
+            if request.attempt:  # the readers confirm a re-execution from this line
+                self.get_logger().warning(REEXECUTION_LOG.format(
+                    index=request.movement_index, attempt=request.attempt)
+                    + ": its client got no answer the first time")
             self._movements.publish(movement)
         return response
 

@@ -226,3 +226,34 @@ def test_the_recorders_quarantine_reports_sum_up_over_a_runs_segments(tmp_path, 
         "write_errors": {"bag.resume1": "could not write a movements message: OSError: "
                                         "[Errno 28] No space"},
         "unreported": ["bag.resume2"]}
+
+
+def test_a_re_execution_the_simulator_never_logged_is_named_a_forgery(tmp_path, clean):
+    """A signed re-execution is the simulator's when its log says it made it; when the run's
+    logs say nothing of it, another holder of the run's key made it, and the warning says so
+    rather than blame the simulator."""
+    from sgim_ros.record_key import KEY_FILE, REEXECUTION_LOG
+
+    redo = samples.movement(40, np.random.default_rng(3), attempt=1)
+    messages = _after_movement(clean, 40, [("movements", redo)])
+
+    def warned(name: str, log: str | None) -> str:
+        run = _run_folder(tmp_path / name, messages)
+        if log is not None:
+            (run / "logs").mkdir()
+            (run / "logs" / "sim_bridge.log").write_text(log)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            records = load_run(run / "bag")
+        assert records.superseded == [40]  # the learner used it either way
+        return " ".join(str(w.message) for w in caught if issubclass(w.category, BagReadWarning))
+
+    made = warned("made", "[WARN] [sim_bridge]: "
+                  + REEXECUTION_LOG.format(index=40, attempt=1) + ": its client got no answer")
+    assert "[40] re-executed after the simulator gave no answer" in made
+    assert "did not make" not in made
+    forged = warned("forged", "[INFO] [sim_bridge]: fishing world ready\n")
+    assert "[40] replaced by a signed re-execution that the run's simulator did not make" in forged
+    assert KEY_FILE in forged and "gave no answer" not in forged
+    alone = warned("alone", None)  # a bag without its run's logs: nothing to ask
+    assert "[40] re-executed after the simulator gave no answer" in alone

@@ -39,6 +39,7 @@ from sgim_nodes.bag.validation import RunValidator, summarise
 from sgim_nodes.bag.writer import STAGING_PREFIX
 from sgim_ros.record_key import (
     KEY_FILE,
+    REEXECUTION_PATTERN,
     SIGNS_MOVEMENTS,
     TRUST_ENV,
     UNKEYED,
@@ -274,6 +275,23 @@ def _limits_for(bag: Path) -> Limits:
     return Limits(teaching_set_size=teaching_set_size(), signing=SIGNS_MOVEMENTS)
 
 
+def simulator_reexecutions(bag: Path) -> set[int] | None:
+    """The movements the run's simulator says, in its logs beside the bag (the run folder's
+    logs/), that it executed again; None when there are no such logs to ask."""
+    bag = bag.parent if bag.is_file() else bag
+    logs = sorted((bag.parent / "logs").rglob("sim_bridge*.log"))
+    if not logs:
+        return None
+    made: set[int] = set()
+    for log in logs:
+        try:
+            text = log.read_text(encoding="utf-8", errors="replace")
+        except OSError:
+            return None
+        made |= {int(m.group(1)) for m in REEXECUTION_PATTERN.finditer(text)}
+    return made
+
+
 def load_run(path: str | Path, topics: Iterable[str] | None = None,
              limits: Limits | None = None, *, validator: RunValidator | None = None,
              into: RunRecords | None = None) -> RunRecords:
@@ -339,11 +357,21 @@ def load_run(path: str | Path, topics: Iterable[str] | None = None,
             records.append(converted)
     run.quarantined = list(validator.quarantined)
     run.superseded = list(validator.superseded)
-    if validator.superseded[superseded:]:
+    replaced = validator.superseded[superseded:]
+    made = simulator_reexecutions(Path(path))
+    if made is not None and set(replaced) - made:
+        forged = sorted(set(replaced) - made)
         warnings.warn(BagReadWarning(
-            f"{path}: movement(s) {validator.superseded[superseded:]} re-executed after the "
-            "simulator gave no answer: the re-execution's record (higher attempt) is the one "
-            "the learner used"), stacklevel=2)
+            f"{path}: movement(s) {forged} replaced by a signed re-execution that the run's "
+            "simulator did not make (its log shows no such re-execution): a process holding "
+            f"the run's key ({KEY_FILE}) made it; the replacing record is the one the learner "
+            "used"), stacklevel=2)
+        replaced = sorted(set(replaced) & made)
+    if replaced:
+        warnings.warn(BagReadWarning(
+            f"{path}: movement(s) {replaced} re-executed after the simulator gave no answer: "
+            "the re-execution's record (higher attempt) is the one the learner used"),
+            stacklevel=2)
     new = validator.quarantined[already:]
     if new:
         warnings.warn(QuarantineWarning(

@@ -43,7 +43,7 @@ class ProcessGroup:
         if self.log_dir is not None and "stdout" not in popen_kwargs:
             path = self.log_dir / f"{name}.log"  # a namespaced node's in a folder of its own
             path.parent.mkdir(parents=True, exist_ok=True)
-            log = open(path, "wb")  # noqa: SIM115 - owned by the child
+            log = open(path, "ab")  # noqa: SIM115 - owned by the child; a respawn appends
             popen_kwargs.setdefault("stdout", log)
             popen_kwargs.setdefault("stderr", subprocess.STDOUT)
         if self._lifeline is None:
