@@ -358,7 +358,7 @@ def load_run(path: str | Path, topics: Iterable[str] | None = None,
     run.quarantined = list(validator.quarantined)
     run.superseded = list(validator.superseded)
     replaced = validator.superseded[superseded:]
-    made = simulator_reexecutions(Path(path))
+    made = simulator_reexecutions(Path(path)) if replaced else None  # the logs, when needed
     if made is not None and set(replaced) - made:
         forged = sorted(set(replaced) - made)
         warnings.warn(BagReadWarning(
