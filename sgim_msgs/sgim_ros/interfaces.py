@@ -81,16 +81,24 @@ def ros_message_class(msgtype: str) -> type:
         raise ValueError(f"no ROS message class for type {msgtype!r}: {error}") from None
 
 
-def topic_qos(topic: str, *, keep_all: bool = False) -> Any:
-    """The graph's QoS profile for a topic (by its last name component): RECORDS, or
+def qos_role(topic: str, *, keep_all: bool = False) -> str:
+    """A topic's QoS role (by its last name component, sgim_ros/qos.py): RECORDS, or
     LATEST_STATE for a state topic, kept whole with `keep_all` (the recorder's)."""
+    if _last(topic) not in STATE_TOPICS:
+        return "RECORDS"
+    return "LATEST_STATE, keep-all" if keep_all else "LATEST_STATE"
+
+
+def topic_qos(topic: str, *, keep_all: bool = False) -> Any:
+    """The graph's QoS profile for a topic: its role's (qos_role)."""
     from rclpy.qos import HistoryPolicy, QoSProfile
 
     from sgim_ros import qos
 
-    if _last(topic) not in STATE_TOPICS:
+    role = qos_role(topic, keep_all=keep_all)
+    if role == "RECORDS":
         return qos.RECORDS
-    if not keep_all:
+    if role == "LATEST_STATE":
         return qos.LATEST_STATE
     return QoSProfile(history=HistoryPolicy.KEEP_ALL, depth=1,
                       reliability=qos.LATEST_STATE.reliability,
@@ -132,12 +140,8 @@ class Endpoint:
 
     @property
     def qos(self) -> str:
-        """A topic's QoS role (sgim_ros/qos.py); '' for a service or an action."""
-        if self.kind not in TOPIC_KINDS:
-            return ""
-        if _last(self.name) not in STATE_TOPICS:
-            return "RECORDS"
-        return "LATEST_STATE, keep-all" if self.keep_all else "LATEST_STATE"
+        """A topic's QoS role (qos_role); '' for a service or an action."""
+        return qos_role(self.name, keep_all=self.keep_all) if self.kind in TOPIC_KINDS else ""
 
     @property
     def conditional(self) -> bool:

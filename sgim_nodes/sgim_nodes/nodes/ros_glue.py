@@ -21,6 +21,7 @@ from sgim_nodes.core.learner_registry import OWN_NAMES, SGIM_ACTS, SGIM_D, is_le
 from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
 from sgim_nodes.core.scale import WorldScale, unit_box
 from sgim_nodes.core.social_config import SocialConfig, declared
+from sgim_nodes.core.teacher_turns import turn_names
 from sgim_ros.entry import AsyncNode, run_node  # noqa: F401 - the nodes' shared entry point
 from sgim_ros.params import (
     Bounds,
@@ -61,7 +62,7 @@ class JobServer:
 
     def __init__(self, node: Node, endpoint: Any, job: Callable[[Any], Awaitable[Any]]
                  ) -> None:
-        """`endpoint`: the node's declared action server (nodes/interfaces.py)."""
+        """`endpoint`: the node's declared action server (sgim_ros/interfaces.py)."""
         self.job = job
         self.node, self.name, self.action_type = node, endpoint.name, endpoint.interface()
         self.busy = False
@@ -193,8 +194,7 @@ def social_config(values: Mapping[str, Any]) -> SocialConfig:
     names = {f.name for f in fields(SocialConfig)}
     given = {k: v for k, v in values.items() if k in names}
     if isinstance(given.get("teacher_turns"), str):
-        given["teacher_turns"] = tuple(n.strip() for n in given["teacher_turns"].split(",")
-                                       if n.strip())
+        given["teacher_turns"] = turn_names(given["teacher_turns"])
     try:
         return SocialConfig(**given)
     except ValueError as error:
