@@ -225,10 +225,11 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                 "a seed of `learn` is one a graph run takes too")
     if args.eval_every < 0:
         p.error("--eval-every must be >= 0")
+    from .teacher_turns import turn_names
+
     try:  # the teachers' names are checked against the world in main()
         args.social = SocialConfig(**{name: getattr(args, name) for name in SOCIAL_OPTIONS},
-                                   teacher_turns=tuple(filter(None,
-                                                              args.teacher_turns.split(","))))
+                                   teacher_turns=turn_names(args.teacher_turns))
     except ValueError as error:  # its messages start with the setting's name
         p.error(f"--{str(error).replace('_', '-')}")
     kind = learner_kind(args.learner)

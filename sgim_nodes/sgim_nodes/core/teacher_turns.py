@@ -116,13 +116,19 @@ class TeacherTurns:
                                               me.spec.name))
 
 
+def turn_names(names: str) -> tuple[str, ...]:
+    """The teachers' names of a comma-separated ``names`` (as --teacher-turns and the
+    teacher node's parameter give them), in their order."""
+    return tuple(n.strip() for n in names.split(",") if n.strip())
+
+
 def turn_specs(env: str, names: str) -> tuple[ExpertSpec, ...]:
     """The world's SGIM-ACTS teachers (acts_runner.EXPERTS_BY_WORLD) named in ``names``
     (comma-separated), in that order."""
     from .acts_runner import EXPERTS_BY_WORLD
 
     known = {s.name: s for s in EXPERTS_BY_WORLD.get(env, ())}
-    wanted = [n.strip() for n in names.split(",") if n.strip()]
+    wanted = turn_names(names)
     unknown = [n for n in wanted if n not in known]
     if not wanted or unknown:
         raise ValueError(f"unknown teacher(s) {', '.join(unknown) or '(none named)'}; world "
