@@ -34,7 +34,7 @@ from .learner_registry import SGIM_D, learner_kind, learner_names, make_learner
 from .random_streams import SEED_MAX, component_rng
 from .repeatable_casts import RepeatableCasts
 from .schedule import Schedule
-from .social_config import SOCIAL_DEFAULTS, SocialConfig, declared
+from .social_config import SOCIAL_DEFAULTS, SocialConfig, declared, turn_names
 from .teaching import (
     ABILITY,
     Teacher,
@@ -225,8 +225,6 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                 "a seed of `learn` is one a graph run takes too")
     if args.eval_every < 0:
         p.error("--eval-every must be >= 0")
-    from .teacher_turns import turn_names
-
     try:  # the teachers' names are checked against the world in main()
         args.social = SocialConfig(**{name: getattr(args, name) for name in SOCIAL_OPTIONS},
                                    teacher_turns=turn_names(args.teacher_turns))

@@ -91,6 +91,12 @@ class SocialConfig:
                              "one teacher")
 
 
+def turn_names(names: str) -> tuple[str, ...]:
+    """The teachers' names of a comma-separated ``names`` (as --teacher-turns and the
+    teacher node's parameter give them), in their order: SocialConfig.teacher_turns."""
+    return tuple(n.strip() for n in names.split(",") if n.strip())
+
+
 SOCIAL_DEFAULTS = SocialConfig()
 """Every setting at its default: what other modules read a default from."""
 

@@ -26,6 +26,7 @@ import numpy as np
 from .environment import Environment, is_success
 from .experts import ExpertSpec
 from .random_streams import member_rng
+from .social_config import turn_names
 from .teaching import Demonstration, Teacher, Turn, check_content
 
 
@@ -114,12 +115,6 @@ class TeacherTurns:
                        else None)
         return Turn(checks, TurnDemonstration(int(me.rows[demo.index]), action, outcome,
                                               me.spec.name))
-
-
-def turn_names(names: str) -> tuple[str, ...]:
-    """The teachers' names of a comma-separated ``names`` (as --teacher-turns and the
-    teacher node's parameter give them), in their order."""
-    return tuple(n.strip() for n in names.split(",") if n.strip())
 
 
 def turn_specs(env: str, names: str) -> tuple[ExpertSpec, ...]:
