@@ -193,3 +193,48 @@ def test_a_parameter_only_another_learner_reads_is_left_out():
 
     assert shaping("sgim-d") == {"goal_generator": {"learner": "sgim-d", "zeta": 50}}
     assert shaping("sgim-acts")["goal_generator"]["teachers"] == "a,b"
+
+
+def test_a_graph_run_counts_its_nodes_code_and_a_runners_keeps_its_value(tmp_path, monkeypatch):
+    """A node edited locally changes what a graph run does: its fingerprint must change with
+    it (so a sweep makes the run again), while a docstring edit must not; a runner's run has
+    no node code and keeps the value it had before node code counted."""
+    import importlib
+    import sys
+
+    package = tmp_path / "scratch_nodes"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    node = package / "imitation.py"
+    node.write_text('"""Imitation."""\nSIGMA = 0.02\n')
+    monkeypatch.syspath_prepend(str(tmp_path))
+    importlib.invalidate_caches()
+    monkeypatch.setattr(fp, "GRAPH_PACKAGES", ("scratch_nodes",))
+
+    def graph_run() -> fp.Fingerprint:
+        fp.graph_code.cache_clear()
+        return fp.fingerprint({"explorer": {"zeta": 50}}, graph=True)
+
+    made = graph_run()
+    node.write_text('"""Imitation, with a longer docstring."""\nSIGMA = 0.02  # noise\n')
+    assert graph_run().value == made.value
+    node.write_text('"""Imitation."""\nSIGMA = 0.01\n')
+    edited = graph_run()
+    assert edited.differences(made) == ["graph_code"]
+    runner = fp.fingerprint({"explorer": {"zeta": 50}})
+    assert "graph_code" not in runner.fields
+    assert runner.value == fp._digest(f"{k}={runner.fields.get(k, '')}".encode()
+                                      for k in fp.FIELDS if k != "graph_code")
+    sys.modules.pop("scratch_nodes", None)
+    fp.graph_code.cache_clear()
+
+
+def test_the_graphs_node_code_covers_every_node_module():
+    """Every module a graph node is made from counts (the world's own modules count in
+    ``world``)."""
+    names = {(f.parent.name, f.stem) for f in fp.graph_files()}
+    for module in ("imitation", "low_level_explorer", "social_interaction", "recorder"):
+        assert ("nodes", module) in names
+    assert ("teacher", "teacher_node") in names and ("sgim_ros", "record_key") in names
+    assert ("sim_bridge", "sim_bridge_node") in names
+    assert ("sim_bridge", "fishing_world") not in names

@@ -64,7 +64,7 @@ def unlike_fingerprint(**changes) -> dict:
 
 def test_a_finished_run_of_another_learner_is_unlike_and_says_why(tmp_path):
     """Resume compares the whole learner, not only the swept settings: a run whose recorded
-    defaults, code or numpy differ from this checkout's is not reused."""
+    defaults, code, nodes' code or numpy differ from this checkout's is not reused."""
     numpy_run = make_run(tmp_path / "numpy", fingerprint=unlike_fingerprint(numpy="1.26.4"))
     state = run_state(numpy_run, SPEC)
     assert state.state is State.UNLIKE and "numpy" in state.reason
@@ -77,6 +77,9 @@ def test_a_finished_run_of_another_learner_is_unlike_and_says_why(tmp_path):
     older = fingerprint(params).to_dict()
     state = run_state(make_run(tmp_path / "zeta", fingerprint=older), SPEC)
     assert state.state is State.UNLIKE and "parameters (zeta)" in state.reason
+    nodes = make_run(tmp_path / "nodes", fingerprint=unlike_fingerprint(graph_code="0" * 16))
+    state = run_state(nodes, SPEC)
+    assert state.state is State.UNLIKE and "graph_code" in state.reason
     bare = make_run(tmp_path / "old", fingerprint={})
     assert "before learner fingerprints" in run_state(bare, SPEC).reason
     resumed = make_run(tmp_path / "resumed")

@@ -308,13 +308,14 @@ class RunParameters:
 
 def fingerprint(values: RunParameters, nodes: Iterable[NodeSpec]):
     """The learner fingerprint of a run of these nodes with these values
-    (provenance/fingerprint.py: of every node, the read-only parameters that shape it)."""
+    (provenance/fingerprint.py: of every node, the read-only parameters that shape it, and
+    the nodes' code)."""
     from sgim_nodes.provenance.fingerprint import fingerprint as make
     from sgim_nodes.provenance.fingerprint import graph_parameters
 
     nodes = list(nodes)
     read_only = {spec.name: [p.name for p in spec.params if p.read_only] for spec in nodes}
-    return make(graph_parameters(values.effective(nodes), read_only))
+    return make(graph_parameters(values.effective(nodes), read_only), graph=True)
 
 
 def masked(values: Mapping[str, Any]) -> dict[str, Any]:

@@ -11,14 +11,17 @@ of its own so that a difference can be named:
   the others stale;
 - ``world``: the fishing world's modules (sim_bridge: the cast, the lake, the scaling, the
   data loaders);
+- ``graph_code``: for a run made through the graph, its nodes' code (GRAPH_PACKAGES: the
+  learner's nodes, the teachers, the simulator's node and the shared ROS helpers), so that a
+  node edited locally makes sweeps make their runs again; absent from a runner's run, whose
+  fingerprint it leaves as it was;
 - ``data``: the world's data files (map, benchmark goals, teaching set, floor), by content;
 - ``parameters``: the run's resolved parameters that shape it (``parameters`` below);
 - ``numpy``, ``scipy``, ``pybullet``, ``python``: the versions that compute it.
 
 Source files count by their syntax tree without docstrings (nor the strings that document a
 dataclass's fields), so a comment or a docstring does not make a page stale, while any change
-of code does. The graph's nodes are not in it: the
-graph = runner tests hold them to the core's movements. Nor is the machine: core/portable.py
+of code does. Nor is the machine: core/portable.py
 makes a seed give the same run on every x86-64 CPU (tests/golden_runs.py holds the proof), so
 reports name the machine but a figure made on one checks on another.
 """
@@ -39,7 +42,10 @@ from typing import Any
 from sgim_nodes.core.learner_registry import SGIM_ACTS, kinds
 
 ENVIRONMENT_FIELDS = ("code", "world", "data", "numpy", "scipy", "pybullet", "python")
-FIELDS = (*ENVIRONMENT_FIELDS, "learner_code", "parameters")
+FIELDS = (*ENVIRONMENT_FIELDS, "learner_code", "graph_code", "parameters")
+OPTIONAL_FIELDS = frozenset({"graph_code"})
+"""Fields that count in the value only when set, so that fingerprints recorded before they
+existed (and a runner's, which has none) keep their values."""
 LEARNER_MODULES = {k.name: k.own_modules for k in kinds(plugins=False) if k.own_modules}
 """Core modules only one learner imports, as its declaration says
 (tests/provenance/test_fingerprint.py checks that a run of any other learner does not,
@@ -50,6 +56,9 @@ WORLD_MODULES = ("bezier", "core_world", "data_files", "fishing_world", "lake", 
                  "scaling")
 """The sim_bridge modules a cast runs through and the one that builds the runner's world with
 its seeds (not its node, renderer or tools)."""
+GRAPH_PACKAGES = ("sgim_nodes.nodes", "teacher", "sgim_ros", "sim_bridge")
+"""The packages whose modules make the graph's nodes (sim_bridge's world modules aside: they
+count in ``world``)."""
 
 PER_RUN = frozenset({"seed", "output", "resume_from", "resume_segments", "storage",
                      "wait_for_recorder", "movement_listeners", "ros_domain_id", "host",
@@ -151,6 +160,25 @@ def world_files() -> list[Path]:
     return [here / f"{name}.py" for name in WORLD_MODULES]
 
 
+def graph_files() -> list[Path]:
+    """The modules of GRAPH_PACKAGES (sim_bridge's world modules aside)."""
+    import importlib
+
+    found = []
+    for name in GRAPH_PACKAGES:
+        folder = Path(importlib.import_module(name).__file__).parent
+        found += [f for f in folder.glob("*.py")
+                  if not (name == "sim_bridge" and f.stem in WORLD_MODULES)]
+    return sorted(found, key=lambda f: (f.parent.name, f.name))  # wherever it is installed
+
+
+@cache
+def graph_code() -> str:
+    """The digest of the graph's node code (by package, file name and syntax tree)."""
+    return _digest([f"{f.parent.name}/".encode() + source_digest([f]).encode()
+                    for f in graph_files()])
+
+
 def data_files() -> dict[str, Path]:
     """The world's data files by name."""
     from sim_bridge import data_files as files
@@ -194,12 +222,13 @@ class Fingerprint:
 
     @property
     def value(self) -> str:
-        return _digest(f"{k}={self.fields.get(k, '')}".encode() for k in FIELDS)
+        return _digest(f"{k}={self.fields.get(k, '')}".encode() for k in FIELDS
+                       if k not in OPTIONAL_FIELDS or self.fields.get(k))
 
     def differences(self, other: Fingerprint) -> list[str]:
         """The fields that differ; for ``parameters``, the parameters that do, by name."""
         out = [k for k in FIELDS if k != "parameters"
-               and self.fields.get(k) != other.fields.get(k)]
+               and self.fields.get(k, "") != other.fields.get(k, "")]
         if self.fields.get("parameters") != other.fields.get("parameters"):
             names = parameter_differences(self.parameters, other.parameters)
             out.append(f"parameters ({', '.join(names)})" if names else "parameters")
@@ -251,11 +280,15 @@ def learner_of(parameters: Mapping[str, Any]) -> str | None:
     return found.pop() if found else None
 
 
-def fingerprint(parameters: Mapping[str, Any]) -> Fingerprint:
-    """The fingerprint of a run of this checkout with these shaping parameters."""
+def fingerprint(parameters: Mapping[str, Any], graph: bool = False) -> Fingerprint:
+    """The fingerprint of a run of this checkout with these shaping parameters; ``graph``:
+    made through the graph, so its nodes' code counts too."""
     params = json.loads(canonical(parameters))
-    return Fingerprint({**environment(), "learner_code": learner_code(module_groups(params)),
-                        "parameters": _digest([canonical(params).encode()])}, params)
+    fields = {**environment(), "learner_code": learner_code(module_groups(params)),
+              "parameters": _digest([canonical(params).encode()])}
+    if graph:
+        fields["graph_code"] = graph_code()
+    return Fingerprint(fields, params)
 
 
 def graph_parameters(node_parameters: Mapping[str, Mapping[str, Any]],
