@@ -19,15 +19,19 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sgim_nodes.bag.records import RunRecords
+from sgim_nodes.bag.records import DemonstrationRecord, MovementRecord, RunRecords
 from sgim_nodes.bag.run_folder import (  # noqa: F401 - the launcher's names for them
     FIRST_SEGMENT,
     load_run_folder,
     next_segment,
     segments,
 )
+from sgim_nodes.core import portable
 from sgim_nodes.core.config import LearnerConfig
+from sgim_nodes.core.environment import PROCESS_CODES
 from sgim_nodes.core.teaching import OWN_PROCESSES
+
+IMITATION_CODE = PROCESS_CODES["imitation"]
 
 if TYPE_CHECKING:
     from sgim_nodes.bag.rebuild import RebuiltState
@@ -117,10 +121,90 @@ def finished_asks(records: RunRecords, count: int) -> set[int]:
     return taken | passed
 
 
-def what_is_redone(records: RunRecords, count: int) -> list[str]:
+@dataclass(frozen=True)
+class CutImitation:
+    """The imitation of the last demonstration taken, cut by the run's end: the movements it
+    made, and how many it owed (``imitation_count``, or fewer at the budget's end)."""
+
+    demonstration: DemonstrationRecord
+    made: list[MovementRecord]
+    owed: int
+    competence_recorded: bool
+
+    @property
+    def remaining(self) -> int:
+        return max(0, self.owed - len(self.made))
+
+    @property
+    def measured(self) -> bool:
+        """Its competence is recorded when the teacher showed where the action lands."""
+        return bool(len(self.demonstration.outcome))
+
+    def best_outcome(self) -> np.ndarray | None:
+        """The made imitation's outcome nearest the demonstrated one (the first of equals)."""
+        goal = np.asarray(self.demonstration.outcome, float)
+        best, distance = None, float("inf")
+        for m in self.made:
+            if m.status == 0 and len(m.outcome) == len(goal):
+                d = portable.norm(np.asarray(m.outcome, float) - goal)
+                if d < distance:
+                    best, distance = np.asarray(m.outcome, float), d
+        return best
+
+    def describe(self) -> str:
+        d = self.demonstration
+        done = (f"its {self.remaining} other imitation(s) are made" if self.remaining
+                else "its imitations were all made")
+        measure = " and its competence recorded" if self.measured else ""
+        return (f"the imitation of demonstration {d.index} (taken at movement "
+                f"{d.movement_index}) was cut after {len(self.made)} of {self.owed} "
+                f"movements: {done}{measure} before the learner goes on")
+
+
+def cut_imitation(records: RunRecords, count: int, imitation_count: int,
+                  budget: int) -> CutImitation | None:
+    """The imitation the run stopped in the middle of, or None: the last demonstration taken
+    shows an action, only its imitation's movements come after it, and fewer than it owed were
+    made (or all were, but the competence of one that shows its outcome is missing)."""
+    shown = [d for d in records.learner_demonstrations if len(d.action)]
+    if not shown:
+        return None
+    demo = shown[-1]
+    later = sorted((m for m in records.movements if m.index > demo.movement_index
+                    and m.process != PROCESS_CODES["evaluation"]), key=lambda m: m.index)
+    if any(m.process != IMITATION_CODE for m in later) or any(
+            d.movement_index > demo.movement_index for d in records.learner_demonstrations):
+        return None  # the run went on after it: its imitation ended
+    made = list({m.index: m for m in later}.values())  # a re-execution counts once
+    owed = min(imitation_count, budget - demo.movement_index)
+    recorded = any(c.from_demonstration and c.movement_index > demo.movement_index
+                   for c in records.competences)
+    cut = CutImitation(demo, made, owed, recorded)
+    if cut.remaining or (cut.measured and not recorded and made):
+        return cut
+    return None
+
+
+def imitation_start_distance(records: RunRecords, demo: DemonstrationRecord,
+                             config: LearnerConfig | None = None) -> float:
+    """Memory's distance to the demonstrated outcome before the demonstration was stored, as
+    the explorer measured it when it took it (the competence of its imitation is measured
+    against it)."""
+    from sgim_nodes.bag.rebuild import rebuild_from_records
+
+    before = rebuild_from_records(records_until(records, demo.movement_index), config)
+    return before.memory.closest_distance(np.asarray(demo.outcome, float))
+
+
+def what_is_redone(records: RunRecords, count: int, imitation_count: int = 0,
+                   budget: int = 0) -> list[str]:
     """The resume report, turn by turn: what the run stopped in the middle of, and what the
-    resumed run does about it."""
+    resumed run does about it (``imitation_count`` and ``budget``: the run's, to name a cut
+    imitation)."""
     lines = []
+    cut = cut_imitation(records, count, imitation_count, budget) if imitation_count else None
+    if cut is not None:
+        lines.append(cut.describe())
     turns, asks = finished_turns(records, count), finished_asks(records, count)
     for d in records.demonstrations:
         if d.help_request and d.help_request not in asks:

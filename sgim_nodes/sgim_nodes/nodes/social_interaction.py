@@ -76,6 +76,7 @@ from sgim_nodes.nodes.graph_startup import (
     wait_for_graph,
 )
 from sgim_nodes.nodes.help_asks import HELP_REQUESTS, HelpAsks, resume_schedule
+from sgim_nodes.nodes.imitation_turn import as_message, imitation_competence, resumed_cut
 from sgim_nodes.nodes.pace import PACE_INTERFACES, PaceControl
 from sgim_nodes.nodes.ros_glue import (
     AsyncNode,
@@ -124,6 +125,8 @@ class SocialInteraction(AsyncNode):
         self.social = social
         scale = world_scale(values)
         self.distances = self.config.distances(scale)
+        self.centre = scale.centre
+        self.cut, self.cut_start = None, float("inf")  # an imitation a kill cut (resume.py)
         # The core learner itself, when the arbiter hosts it (module docstring).
         self.hosted = (make_learner(self.learner, values["action_size"],
                                     values["outcome_size"], values["seed"], self.config, scale)
@@ -170,6 +173,9 @@ class SocialInteraction(AsyncNode):
             self.episodes.resume(point.records)
         resume_schedule(self.schedule, point.records, point.count, point.demonstration_turns)
         self.evaluated = set(point.evaluated)
+        if self.social and not self.acts and self.hosted is None:
+            self.cut, self.cut_start = resumed_cut(point, self.config, self.total,
+                                                   self.centre)
         demo = point.latest_demonstration
         if demo is not None and self.hosted is not None and self.social:
             self.hosted.on_demonstration(*shown_parts(demo))
@@ -240,6 +246,9 @@ class SocialInteraction(AsyncNode):
         return await call_bounded(self, client, request, name, self.p["call_timeout"])
 
     async def _run(self) -> None:
+        if self.cut is not None:
+            await self._finish_cut_imitation(self.cut)
+            self.cut = None
         while self.count < self.total:
             if self.pace is not None:
                 await self.pace.hold(self.count)
@@ -333,15 +342,24 @@ class SocialInteraction(AsyncNode):
         # The imitation never runs past the budget (the single-process runner stops there).
         result = await self.imitation(demo, min(self.config.imitation_count,
                                                  self.total - self.count))
-        if result is not None and result.movements_used > 0:
-            goal = vec(demo.outcome)
-            best = vec(result.best_outcome) if len(result.best_outcome) else None
-            comp = self.distances.competence(goal, best, reply.closest_distance)
-            self.publish_competence(Competence(
-                stamp=self.get_clock().now().to_msg(), goal_index=0,
-                movement_index=self.count, goal=floats(goal), reached=result.best_outcome,
-                competence=comp, movements_used=result.movements_used,
-                from_demonstration=True))
+        self._imitation_competence(demo, result, reply.closest_distance)
+
+    def _imitation_competence(self, demo: Demonstration, result: Imitate.Result | None,
+                              start: float, earlier=None, earlier_used: int = 0) -> None:
+        made = imitation_competence(self.distances, demo, result, start, self.count,
+                                    self.get_clock().now().to_msg(), earlier, earlier_used)
+        if made is not None:
+            self.publish_competence(made)
+
+    async def _finish_cut_imitation(self, cut) -> None:
+        """A resumed run first makes the imitations its kill cut, then records the whole
+        imitation's competence, as the uninterrupted run would have (imitation_turn.py)."""
+        self.get_logger().info(f"resume: {cut.describe()}")
+        demo = as_message(cut)
+        result = await self.imitation(demo, cut.remaining) if cut.remaining else None
+        if cut.measured and not cut.competence_recorded:
+            self._imitation_competence(demo, result, self.cut_start, cut.best_outcome(),
+                                       len(cut.made))
 
     async def goal_attempt(self, cap: int, demonstrated=()) -> ReachGoal.Result:
         """Goals drawn by the goal generator and reached by the explorer, up to `cap`
