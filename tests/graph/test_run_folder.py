@@ -15,7 +15,9 @@ from sgim_nodes.graph.run_folder import (
     RunFolderError,
     RunLock,
     check_resume,
+    read_claim,
     read_metadata,
+    write_claim,
     write_metadata,
 )
 from tests.bag.samples import synthetic_run, write_bag
@@ -81,6 +83,24 @@ def test_resume_sees_movements_the_recording_lost(tmp_path):
     state = check_resume(tmp_path, dict(META, movements_done=52))
     assert (state.recorded, state.claimed) == (40, 52)
     assert state.lost == (41, 52) and not state.complete
+
+
+def test_the_claim_of_the_last_segment_names_what_a_full_disk_lost(tmp_path):
+    """metadata.yaml could not be written (it still says 'running', no count): the claim file,
+    written in place, says what the segment made; a claim of an earlier segment (its resume
+    was killed before it said anything) does not count."""
+    write_bag(tmp_path / "bag", synthetic_run(n=40))
+    running = dict(META, outcome=RUNNING)
+    assert write_claim(tmp_path, "bag", 0) == ""
+    size = (tmp_path / ".made").stat().st_size
+    assert check_resume(tmp_path, running).lost is None
+    assert write_claim(tmp_path, "bag", 57) == "" and read_claim(tmp_path) == ("bag", 57)
+    assert (tmp_path / ".made").stat().st_size == size  # in place: no block to find
+    assert check_resume(tmp_path, running).lost == (41, 57)
+    write_bag(tmp_path / "bag.resume1", synthetic_run(n=40))
+    assert check_resume(tmp_path, running).claimed == 0
+    (tmp_path / ".made").write_text("nonsense")
+    assert read_claim(tmp_path) is None
 
 
 def test_a_finished_run_whose_bag_is_short_is_not_complete(tmp_path):

@@ -1,6 +1,7 @@
-"""A disk that stays full (issue 31): the run fails on one line naming ENOSPC, leaves metadata
---resume reads, a resume on the still-full disk refuses on one line, and once there is room
-the resume carries on and keeps the first failure in metadata.yaml.
+"""A disk that stays full: the run fails on one line naming ENOSPC, leaves metadata --resume
+reads, a resume on the still-full disk refuses on one line, and once there is room the resume
+carries on, keeps the first failure in metadata.yaml, names the movements the full disk lost
+and says how to make the cut recording whole.
 
 The full disk is a small tmpfs mounted over the runs folder in a mount namespace of the test's
 own (unshare; as root, or in a user namespace), which only the run's processes see."""
@@ -58,7 +59,17 @@ cp -a {runs}/full {out}/full
         f"run_experiment: failed: the disk holding {runs}/full is full (0 bytes free: No space "
         "left on device [ENOSPC]): make room, then --resume again"], second
     # Room again (the folder on the test's own disk): the resume finishes and says what ended
-    # the first part.
+    # the first part, which movements the full disk lost and that its recording is cut.
+    import warnings
+
+    from sgim_nodes.bag.resume import load_run_folder
+    from sgim_nodes.graph.run_folder import read_claim
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        recorded = max(m.index for m in load_run_folder(out / "full").movements)
+    segment, made = read_claim(out / "full")
+    assert segment == "bag" and made > recorded, (made, recorded)  # made, then lost
     done = subprocess.run([RUN, "--resume", str(out / "full"), "--quiet", "--domain",
                            str(ros_domain)], capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
@@ -66,3 +77,7 @@ cp -a {runs}/full {out}/full
     meta = yaml.safe_load((out / "full" / "metadata.yaml").read_text())
     assert meta["outcome"] == "finished" and meta["movements_done"] == 400
     assert "No space left on device" in meta["resumed"][0]["previous_end"]
+    assert meta["resumed"][0]["lost_movements"] == [recorded + 1, made]
+    assert f"movements {recorded + 1}..{made} were lost" in done.stderr
+    assert meta["resumed"][0]["cut_recordings"] == ["bag"]
+    assert "ros2run.sh sgim_nodes repair" in done.stderr

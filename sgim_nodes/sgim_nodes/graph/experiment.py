@@ -47,7 +47,13 @@ from sgim_nodes.graph.domain import (
 from sgim_nodes.graph.experiment_options import REPO, default_timeout, parse_args
 from sgim_nodes.graph.plan import Plan, plan_new, plan_resume
 from sgim_nodes.graph.processes import ProcessGroup
-from sgim_nodes.graph.run_folder import METADATA, RUNNING, RunFolderError, write_metadata
+from sgim_nodes.graph.run_folder import (
+    METADATA,
+    RUNNING,
+    RunFolderError,
+    write_claim,
+    write_metadata,
+)
 from sgim_nodes.graph.supervise import Interrupted, RunFailed, say
 from sgim_ros import record_key
 from sgim_ros.params import ParameterError
@@ -164,6 +170,8 @@ def launch(args: argparse.Namespace, plan: Plan, reservation: DomainReservation)
         env[record_key.ENV] = plan.record_key
     meta["ros_domain_id"] = domain
     write_metadata(run_dir, meta)
+    segment = Path(plan.values.shared["output"]).name
+    write_claim(run_dir, segment, plan.done)  # its room taken now, while there is some
     timeout = args.timeout or default_timeout(args.movements, plan.teacher)
     say(f"{plan.learner}, seed {args.seed}, {args.movements} movements, domain {domain}, "
         f"{len(plan.nodes)} nodes, timeout {timeout:g} s -> {run_dir}")
@@ -227,6 +235,7 @@ def launch(args: argparse.Namespace, plan: Plan, reservation: DomainReservation)
                             duration_s=round(time.monotonic() - started, 2))
                 meta.pop("launcher_pid", None)
                 meta["quarantine"] = quarantine(run_dir)
+                write_claim(run_dir, segment, meta["movements_done"])
                 try:
                     write_metadata(run_dir, meta)
                 except OSError as error:  # a full disk: said here, kept by the next resume

@@ -160,10 +160,15 @@ def plan_resume(args: argparse.Namespace) -> Plan | None:
         if state.lost:
             first, last = state.lost
             say(f"the recordings of {run_dir} end at movement {state.recorded}, but the run "
-                f"made {state.claimed} ({METADATA}, outcome "
+                f"made {state.claimed} (its launcher said so; outcome "
                 f"{str(meta.get('outcome', 'unknown')).split(':')[0]}): "
                 f"movements {first}..{last} were lost. The resumed run carries on from "
                 f"movement {state.recorded}, where the recordings end, so they are made again")
+        cut = [part.name for part in segments(run_dir) if not (part / METADATA).exists()]
+        if cut:
+            say(f"note: {', '.join(cut)} of {run_dir} ended without their rosbag2 {METADATA}: "
+                "this project's readers read them, and `ros_ws/ros2run.sh sgim_nodes repair "
+                f"{run_dir}` makes them whole for rosbags, ros2 bag and Foxglove")
         earlier, unknown = recorded_learner(values.shared)
         if earlier or unknown:
             kept = ", ".join(f"{k}={v}" for k, v in earlier.items())
@@ -180,7 +185,7 @@ def plan_resume(args: argparse.Namespace) -> Plan | None:
                  "from_movement": state.recorded}
         if previous_end:  # a full disk's error, kept now that there is room again
             entry["previous_end"] = f"failed: {previous_end}"
-        redone = _what_is_redone(run_dir, state.recorded)
+        redone = _what_is_redone(run_dir, state.recorded, values.shared, int(meta["movements"]))
         for line in redone:
             say(f"resume: {line}")
         if redone:
@@ -191,6 +196,8 @@ def plan_resume(args: argparse.Namespace) -> Plan | None:
                                                      acts_teachers(values.shared))))
         if state.lost:
             entry["lost_movements"] = list(state.lost)
+        if cut:
+            entry["cut_recordings"] = cut
         meta.setdefault("resumed", []).append(entry)
         meta.update(outcome=RUNNING, launcher_pid=os.getpid())
         args.learner, args.seed, args.movements = learner, meta["seed"], meta["movements"]
@@ -215,7 +222,7 @@ def _recorder_trouble(run_dir: Path) -> str:
     return reason if "could not" in reason or "space" in reason.lower() else ""
 
 
-def _what_is_redone(run_dir: Path, count: int) -> list[str]:
+def _what_is_redone(run_dir: Path, count: int, shared: dict[str, Any], budget: int) -> list[str]:
     """The resume report (bag/resume.py): what the run stopped in the middle of."""
     import warnings
 
@@ -224,7 +231,8 @@ def _what_is_redone(run_dir: Path, count: int) -> list[str]:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the recordings' damage is said elsewhere
-            return what_is_redone(load_run_folder(run_dir), count)
+            return what_is_redone(load_run_folder(run_dir), count,
+                                  int(shared.get("imitation_count") or 0), budget)
     except Exception as error:  # the report must not stop a resume the nodes can make
         return [f"what the run stopped in the middle of could not be read ({error})"]
 

@@ -2,6 +2,7 @@
 
     runs/<name>/
         .lock          held (flock) by the launcher and every node of the run while they live
+        .made          the movements the last segment made, written in place (CLAIM)
         metadata.yaml  learner, seed, budget, parameters, versions, timing, outcome
         params.yaml    the ROS parameter file every node was started with
         bag/, bag.resumeN/, logs/
@@ -29,6 +30,11 @@ LOCK_NAME = ".lock"
 METADATA = "metadata.yaml"
 PARAMS = "params.yaml"
 RUNNING = "running"  # the outcome while a launcher works; left as is if the launcher is killed
+CLAIM = ".made"
+CLAIM_SIZE = 64
+"""The claim file: '<segment> <movements made>', padded to CLAIM_SIZE bytes when the launch
+has room and overwritten in place at its end, so that it is written even on a disk that has
+filled since, where metadata.yaml cannot be: a resume then knows which movements were lost."""
 
 
 NAME_MAX = 255  # bytes of one path component (Linux, most file systems)
@@ -146,6 +152,31 @@ def recorded_count(run_dir: Path) -> int:
     return max((m.index for m in records.movements), default=0)
 
 
+def write_claim(run_dir: Path, segment: str, count: int) -> str:
+    """Say in the claim file that ``segment`` made ``count`` movements, in place (no new block
+    on a full disk once the file exists); '' or why it could not."""
+    text = f"{segment} {int(count)}".encode().ljust(CLAIM_SIZE)[:CLAIM_SIZE]
+    try:
+        fd = os.open(run_dir / CLAIM, os.O_WRONLY | os.O_CREAT, 0o644)
+        try:
+            os.pwrite(fd, text, 0)
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+    except OSError as error:
+        return error.strerror or str(error)
+    return ""
+
+
+def read_claim(run_dir: Path) -> tuple[str, int] | None:
+    """(segment, movements it made) from the claim file, or None (absent or malformed)."""
+    try:
+        segment, count = (run_dir / CLAIM).read_bytes().decode().split()
+        return segment, int(count)
+    except (OSError, UnicodeDecodeError, ValueError):
+        return None
+
+
 @dataclass
 class ResumeCheck:
     """What the recordings say before a resume: whether there is anything to do, and what
@@ -165,10 +196,16 @@ class ResumeCheck:
 
 
 def check_resume(run_dir: Path, meta: dict[str, Any]) -> ResumeCheck:
-    """Compare the recordings with what metadata.yaml says the run did."""
+    """Compare the recordings with what metadata.yaml, or the claim file of the last segment
+    (when metadata.yaml could not be written), says the run did."""
+    from sgim_nodes.bag.run_folder import segments
+
     claimed = meta.get("movements_done", 0)
     if not isinstance(claimed, int) or isinstance(claimed, bool):
         claimed = 0
     if meta.get("outcome") == "finished":
         claimed = max(claimed, meta["movements"])
+    claim, parts = read_claim(run_dir), segments(run_dir)
+    if claim is not None and parts and claim[0] == parts[-1].name:
+        claimed = max(claimed, claim[1])
     return ResumeCheck(recorded_count(run_dir), claimed, meta["movements"])
