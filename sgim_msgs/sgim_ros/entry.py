@@ -160,7 +160,24 @@ def run_node(factory: Callable[[], Node], args: list[str] | None = None,
     finally:
         profile.write()
         tear_down(factory.__name__, spinner, node)
-    return int(getattr(node, "exit_code", 0))
+    code = int(getattr(node, "exit_code", 0))
+    if os.environ.get(LAUNCHER_FD):
+        end_now(code)
+    return code
+
+
+def end_now(code: int) -> None:
+    """End a node of a run once it is torn down, without the interpreter's finalization.
+
+    Why: the middleware's participant can spin forever in its destructor at exit (seen after
+    a launcher's SIGKILL: a node at 70 % of a core for minutes, its launcher watchdog already
+    stopped with the other daemon threads), and such a node holds the run folder's lock, so
+    the run cannot be resumed. Everything the node keeps is written by now (the recorder
+    closes its bag in destroy_node); only the standard streams are flushed here."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(code)
 
 
 PROFILE_ENV = "SGIM_PROFILE"

@@ -266,3 +266,42 @@ def test_nodes_starting_together_never_block_on_their_shared_lifeline():
         other.wait()
         os.close(read_end)
         os.close(write_end)
+
+
+QUICK_NODE = """
+import atexit, os, sys
+import rclpy.node
+from sgim_ros.entry import run_node
+
+class Done(rclpy.node.Node):
+    def __init__(self):
+        super().__init__("done_at_once")
+        self.finished, self.exit_code = True, 3
+
+atexit.register(lambda: print("finalized", flush=True))
+if len(sys.argv) > 1:
+    os.environ["SGIM_LAUNCHER_FD"] = sys.argv[1]
+print("returned", run_node(Done, ["done_at_once"]), flush=True)
+"""
+
+
+@pytest.mark.ros
+def test_a_node_of_a_run_ends_without_the_interpreters_finalization():
+    """The middleware can spin forever in its destructors at exit, after the daemon threads
+    (the launcher watchdog among them) are stopped: a node of a run then outlived its launcher
+    and held the run's lock. A node started by the launcher ends right after its teardown, with
+    its exit code; one started alone finalizes as usual."""
+    read_end, write_end = os.pipe()
+    try:
+        of_a_run = subprocess.run([sys.executable, "-c", QUICK_NODE, str(read_end)],
+                                  pass_fds=(read_end,), capture_output=True, text=True,
+                                  timeout=60)
+        alone = subprocess.run([sys.executable, "-c", QUICK_NODE], capture_output=True,
+                               text=True, timeout=60)
+    finally:
+        os.close(read_end)
+        os.close(write_end)
+    assert of_a_run.returncode == 3, of_a_run.stderr
+    assert "finalized" not in of_a_run.stdout and "returned" not in of_a_run.stdout
+    assert alone.returncode == 0 and "returned 3" in alone.stdout
+    assert "finalized" in alone.stdout
