@@ -1,23 +1,22 @@
-"""Chaos soak: short runs through the graph under node kills, launcher kills, rogue publishers
-and a disk that fills, each resumed until it finishes, then checked against an uninterrupted
-run of the same seed (issue 31, item 7).
+"""Chaos soak: short runs through the graph under node kills, launcher kills, forged records and
+a disk that fills, each resumed until it finishes, then checked (benchmarks/soak_checks.py).
 
 Every run is sgim-d, 300 movements, a teacher every 50, evaluations every 100. Its faults are
-drawn from the run's own seed (one to three of: kill a node of the graph, kill the launcher,
-publish forged records while it runs, run its first part on a disk that fills), and it is
-resumed (--resume) until it finishes, at most 6 times. Then two checks that share no code with
-the readers of the project:
-  - a rosbags-only pass over every segment of its bag: the movements whose HMAC the run's key
-    verifies (stdlib hmac) count 1..300, each once (a re-execution replacing its index);
-  - the project's rebuild, compared with an uninterrupted run of the same seed made by the
-    single-process runner (which the graph equals: tests/ros/test_graph_runs.py): the movements
-    before the first interruption must be the reference's, bit for bit (after it, a resumed run
-    restarts its random streams: the documented difference); every teacher turn has its word
-    and, when something was shown, the learner took it; every evaluation point is there; the
-    interest tree holds every competence recorded.
-A run is *silently wrong* when its metadata says finished and a check fails. Printed: the
-counts (runs, faults by kind, runs finished, resumes, failures with their message, silently
-wrong) and one line per run.
+drawn from the run's own seed, one to three of:
+  node-kill        kill a node of the graph (SIGKILL) while the run goes on;
+  launcher-kill    kill the launcher, and so the run;
+  cut-imitation    kill the launcher during a teacher's turn's imitation;
+  rogue            publish bad records: forged re-executions, duplicates, far indices,
+                   demonstrations with NaN or an unknown teaching entry, NaN competences;
+  forged-teaching  publish well-formed demonstrations nobody signed: at the teacher's turns,
+                   as answers to asks (also as an expert), and as demonstrations taken;
+  web-offer        run the web teacher's page beside the run, publish a forged movement, and
+                   ask the page for an offer where the forgery lands;
+  domain-clash     start a second run on the run's ROS domain while it runs;
+  full-disk        run the first part on a disk that fills.
+It is resumed (--resume) until it finishes, at most 6 times. A run is *silently wrong* when its
+metadata says finished and a check fails. Printed: the counts (runs, faults by kind, runs
+finished, resumes, failures with their message, silently wrong) and one line per run.
 
     source ros_ws/env.sh && python benchmarks/chaos_soak.py --runs 20
 """
@@ -25,35 +24,38 @@ wrong) and one line per run.
 from __future__ import annotations
 
 import argparse
-import hashlib
-import hmac
 import json
 import os
 import random
+import re
 import shutil
 import signal
-import struct
 import subprocess
 import tempfile
 import threading
 import time
-import warnings
+import urllib.request
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import yaml
+from soak_checks import FORGED_OUTCOME, run_problems  # beside this script
 
 from sgim_nodes.core.learner_registry import SGIM_D
 
 REPO = Path(__file__).resolve().parents[1]
 RUN = str(REPO / "ros_ws" / "run_experiment.sh")
+ROS2RUN = str(REPO / "ros_ws" / "ros2run.sh")
 MOVEMENTS, PERIOD, EVAL_EVERY = 300, 50, 100
 NODES = ("sim_bridge", "low_level_explorer", "evaluator", "social_interaction",
          "interest_computer", "goal_generator", "teacher", "imitation", "recorder", "markers")
-FAULTS = ("node-kill", "launcher-kill", "rogue", "full-disk")
+KILLS = ("node-kill", "launcher-kill", "cut-imitation")
+FORGERIES = ("rogue", "forged-teaching", "web-offer")
+FAULTS = (*KILLS, *FORGERIES, "domain-clash", "full-disk")
 MAX_RESUMES = 6
+FORGED_INDEX = 10**15  # the web-offer forgery's movement index
 
 
 @dataclass
@@ -90,8 +92,6 @@ def node_pid(run_dir: Path, executable: str) -> int | None:
 
 def progress(run_dir: Path) -> int:
     """The latest movement count the arbiter logged (0 when none yet)."""
-    import re
-
     best = 0
     for log in run_dir.glob("logs/**/social_interaction.log"):
         try:
@@ -102,22 +102,22 @@ def progress(run_dir: Path) -> int:
     return best
 
 
-def run_argv(seed: int, runs: Path, domain: int) -> list[str]:
+def run_argv(seed: int, runs: Path, domain: int, name: str = "") -> list[str]:
     return [RUN, SGIM_D, "--seed", str(seed), "--movements", str(MOVEMENTS),
             "--demonstration-period", str(PERIOD), "--eval-every", str(EVAL_EVERY), "--runs-dir",
-            str(runs), "--name", f"soak{seed}", "--domain", str(domain), "--quiet", "--timeout",
-            "600"]
+            str(runs), "--name", name or f"soak{seed}", "--domain", str(domain), "--quiet",
+            "--timeout", "600"]
 
 
-class Rogue(threading.Thread):
-    """Publishes forged records into the run's domain while it runs: re-executions of real
-    movements with another outcome, duplicates, far indices, bad demonstrations, bad
-    competences."""
+class Peer(threading.Thread):
+    """A process's worth of ROS in the run's domain: it hears the movements (to time a kill
+    at an imitation) and publishes the forgeries of ``kinds`` while the run goes on."""
 
-    def __init__(self, domain: int, seed: int) -> None:
+    def __init__(self, domain: int, seed: int, kinds: set[str]) -> None:
         super().__init__(daemon=True)
-        self.domain, self.seed, self.stop = domain, seed, threading.Event()
-        self.sent = 0
+        self.domain, self.seed, self.kinds = domain, seed, kinds
+        self.stop, self.imitating = threading.Event(), threading.Event()
+        self.sent: Counter = Counter()
 
     def run(self) -> None:
         import rclpy
@@ -129,88 +129,212 @@ class Rogue(threading.Thread):
         os.environ["ROS_DOMAIN_ID"] = str(self.domain)
         context = rclpy.Context()
         rclpy.init(context=context)
-        node = rclpy.create_node(f"rogue{self.seed}", context=context)
+        node = rclpy.create_node(f"peer{self.seed}", context=context)
         executor = SingleThreadedExecutor(context=context)
         executor.add_node(node)
         seen: list = []
-        node.create_subscription(Movement, "/movements", seen.append, qos.RECORDS)
-        moves = node.create_publisher(Movement, "/movements", qos.RECORDS)
-        demos = node.create_publisher(Demonstration, "/demonstrations", qos.RECORDS)
-        comps = node.create_publisher(Competence, "/competences", qos.RECORDS)
+
+        def heard(m: Movement) -> None:
+            seen.append(m)
+            if m.process == Movement.PROCESS_IMITATION and m.index > PERIOD:
+                self.imitating.set()  # a later turn's: the first one's is too early to cut
+
+        node.create_subscription(Movement, "/movements", heard, qos.RECORDS)
+        out = {"movements": node.create_publisher(Movement, "/movements", qos.RECORDS),
+               "demonstrations": node.create_publisher(Demonstration, "/demonstrations",
+                                                       qos.RECORDS),
+               "taken": node.create_publisher(Demonstration, "/demonstrations_taken",
+                                              qos.RECORDS),
+               "competences": node.create_publisher(Competence, "/competences", qos.RECORDS)}
         rng = np.random.default_rng(self.seed)
         try:
             while not self.stop.is_set():
                 executor.spin_once(timeout_sec=0.2)
-                if not seen or rng.random() > 0.3:
+                if not seen or rng.random() > 0.3 or not self.kinds - {"watch"}:
                     continue
-                last = seen[-1]
-                kind = int(rng.integers(4))
-                if kind == 0:  # a forged re-execution right after the real record
-                    moves.publish(Movement(index=last.index, process=last.process, status=0,
-                                           action=list(last.action), outcome=[0.99, 0.99],
-                                           goal=list(last.goal), goal_index=last.goal_index,
-                                           attempt=1, signature=list(last.signature)))
-                elif kind == 1:  # a duplicate of an earlier index, and one far ahead
-                    moves.publish(Movement(index=max(1, last.index - 3), process=0, status=0,
-                                           action=list(rng.uniform(-1, 1, 24)),
-                                           outcome=[0.5, 0.5]))
-                    moves.publish(Movement(index=last.index + 50, process=0, status=0,
-                                           action=[0.0] * 24, outcome=[0.1, 0.1]))
-                elif kind == 2:  # demonstrations with NaN and an unknown teaching entry
-                    demos.publish(Demonstration(index=900 + self.sent, movement_index=last.index,
-                                                action=[float("nan")] * 24, outcome=[0.1, 0.1],
-                                                teaching_set_index=1, source="human"))
-                    demos.publish(Demonstration(index=901 + self.sent, movement_index=last.index,
-                                                action=[0.1] * 24, outcome=[0.1, 0.1],
-                                                teaching_set_index=2**31 - 1, source="human"))
-                else:  # a competence of NaN
-                    comps.publish(Competence(goal=[0.1, 0.1], competence=float("nan"),
-                                             movements_used=2, movement_index=last.index))
-                self.sent += 1
+                kind = str(rng.choice(sorted(self.kinds - {"watch"})))
+                getattr(self, kind.replace("-", "_"))(out, seen[-1], rng)
+                self.sent[kind] += 1
         finally:
             node.destroy_node()
             executor.shutdown()
             rclpy.shutdown(context=context)
 
+    def rogue(self, out, last, rng) -> None:
+        """Bad records: a forged re-execution, duplicates, far indices, NaN."""
+        from sgim_msgs.msg import Competence, Demonstration, Movement
 
-def segment(soak: Soak, argv: list[str], run_dir: Path, domain: int, kills: bool,
-            rogue: bool) -> str:
+        kind = int(rng.integers(4))
+        if kind == 0:  # a forged re-execution right after the real record
+            out["movements"].publish(Movement(
+                index=last.index, process=last.process, status=0, action=list(last.action),
+                outcome=list(FORGED_OUTCOME), goal=list(last.goal), goal_index=last.goal_index,
+                attempt=1, signature=list(last.signature)))
+        elif kind == 1:  # a duplicate of an earlier index, and one far ahead
+            out["movements"].publish(Movement(index=max(1, last.index - 3), process=0, status=0,
+                                              action=list(rng.uniform(-1, 1, 24)),
+                                              outcome=list(FORGED_OUTCOME)))
+            out["movements"].publish(Movement(index=last.index + 50, process=0, status=0,
+                                              action=[0.0] * 24, outcome=list(FORGED_OUTCOME)))
+        elif kind == 2:  # demonstrations with NaN and an unknown teaching entry
+            out["demonstrations"].publish(Demonstration(
+                index=900, movement_index=last.index, action=[float("nan")] * 24,
+                outcome=[0.1, 0.1], teaching_set_index=1, source="human"))
+            out["demonstrations"].publish(Demonstration(
+                index=901, movement_index=last.index, action=[0.1] * 24, outcome=[0.1, 0.1],
+                teaching_set_index=2**31 - 1, source="human"))
+        else:  # a competence of NaN
+            out["competences"].publish(Competence(goal=[0.1, 0.1], competence=float("nan"),
+                                                  movements_used=2,
+                                                  movement_index=last.index))
+
+    def forged_teaching(self, out, last, rng) -> None:
+        """Well-formed teaching nobody signed: the teacher's word at the next turn, an answer
+        to an ask (as the automatic teacher and as an expert), a demonstration 'taken'."""
+        from sgim_msgs.msg import Demonstration
+
+        turn = (last.index // PERIOD + 1) * PERIOD
+        action = list(rng.uniform(-0.5, 0.5, 24))
+        for topic, at, source, ask in (("demonstrations", turn, "automatic", 0),
+                                       ("demonstrations", last.index, "automatic", 1),
+                                       ("demonstrations", last.index, "expert:rough", 2),
+                                       ("taken", last.index, "automatic", 0)):
+            out[topic].publish(Demonstration(
+                index=int(rng.integers(1, 40)), movement_index=int(at), action=action,
+                outcome=list(FORGED_OUTCOME), teaching_set_index=int(rng.integers(0, 40)),
+                source=source, help_request=ask))
+
+    def web_offer(self, out, last, rng) -> None:
+        """An unsigned movement landing at FORGED_OUTCOME, far ahead, for the page to offer."""
+        from sgim_msgs.msg import Movement
+
+        out["movements"].publish(Movement(index=FORGED_INDEX, process=1, status=0,
+                                          action=[0.3] * 24, outcome=list(FORGED_OUTCOME),
+                                          goal=list(FORGED_OUTCOME), goal_index=1))
+
+
+class WebPage:
+    """The web teacher's node beside the run, in its domain and with its key, as a person's
+    page would be; ``problems()`` asks it what it counts and offers at the forgery."""
+
+    def __init__(self, run_dir: Path, domain: int, workdir: Path) -> None:
+        self.address = workdir / f"page{run_dir.name}.url"
+        key_file = run_dir / "record.key"
+        deadline = time.monotonic() + 60
+        while not key_file.exists() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        env = dict(os.environ, ROS_DOMAIN_ID=str(domain),
+                   SGIM_RECORD_KEY=key_file.read_text().strip())
+        self.process = subprocess.Popen(
+            [ROS2RUN, "teacher", "web_teacher", "--ros-args", "-p", "port:=0",
+             "-p", f"address_file:={self.address}", "-p", "render_casts:=false"],
+            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        deadline = time.monotonic() + 60  # its address, read now: it goes when the run ends
+        while not self.address.exists() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        self.url = self.address.read_text().strip().rstrip("/") if self.address.exists() else ""
+
+    def _ask(self, method: str, path: str, body: dict | None = None) -> dict:
+        data = json.dumps(body).encode() if body is not None else None
+        request = urllib.request.Request(self.url + path, data=data, method=method,
+                                         headers={"Content-Type": "application/json",
+                                                  "X-Teacher": "1"})
+        with urllib.request.urlopen(request, timeout=10) as answer:
+            return json.loads(answer.read())
+
+    def problems(self) -> list[str]:
+        if not self.url:
+            return ["the page did not start"]
+        try:
+            state = self._ask("GET", "/api/state")
+            offer = self._ask("POST", "/api/command", {"command": "offer",
+                                                       "x": FORGED_OUTCOME[0],
+                                                       "y": FORGED_OUTCOME[1]})
+        except (OSError, ValueError) as error:
+            return [f"the page did not answer ({error})"]
+        problems = []
+        if int(state.get("count", 0)) > MOVEMENTS:
+            problems.append(f"the page counts {state['count']} movements")
+        landed = (offer.get("offer") or {}).get("outcome")
+        if landed and np.allclose(landed, FORGED_OUTCOME):
+            problems.append(f"the page offered the forgery: {offer.get('message')}")
+        return problems
+
+    def close(self) -> None:
+        self.process.terminate()
+        try:
+            self.process.wait(20)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+
+
+def clash(soak: Soak, runs: Path, domain: int) -> None:
+    """A second run asks for the run's domain: it must be refused at once, touching nothing."""
+    other = subprocess.run(run_argv(soak.seed, runs, domain, f"clash{soak.seed}"),
+                           capture_output=True, text=True, timeout=120)
+    said = (other.stdout + other.stderr).strip().splitlines()
+    if other.returncode != 2 or not said or "held by another run" not in said[-1]:
+        soak.problems.append(f"a second run on domain {domain}: exit {other.returncode}, "
+                             f"{said[-1] if said else 'nothing said'}")
+    if (runs / f"clash{soak.seed}").exists():
+        soak.problems.append("the refused second run left a folder")
+
+
+def segment(soak: Soak, argv: list[str], run_dir: Path, domain: int, first: bool,
+            workdir: Path) -> str:
     """One launch (a first part or a resume) with its faults; its launcher's last line."""
     rng = random.Random(soak.seed * 7 + soak.resumes)
-    forger = Rogue(domain, soak.seed) if rogue else None
+    kinds = {f for f in soak.faults if f in FORGERIES} if first else set()
+    kills = [f for f in soak.faults if f in KILLS] if first else []
+    peer = Peer(domain, soak.seed, kinds | ({"watch"} if kills else set()))
     child = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    if forger:
-        forger.start()
-    if kills:
-        at = progress(run_dir) + rng.randint(20, 120)
-        deadline = time.monotonic() + 600
-        while progress(run_dir) < at and child.poll() is None and time.monotonic() < deadline:
-            time.sleep(0.2)
+    peer.start()
+    page = WebPage(run_dir, domain, workdir) if "web-offer" in kinds else None
+    try:
+        if first and "domain-clash" in soak.faults:
+            deadline = time.monotonic() + 120
+            while progress(run_dir) < 10 and child.poll() is None \
+                    and time.monotonic() < deadline:
+                time.sleep(0.2)
+            clash(soak, run_dir.parent, domain)
+        if kills:
+            at = progress(run_dir) + rng.randint(20, 120)
+            deadline = time.monotonic() + 600
+            while child.poll() is None and time.monotonic() < deadline and (
+                    not peer.imitating.is_set() if "cut-imitation" in kills
+                    else progress(run_dir) < at):
+                time.sleep(0.05)
+            if child.poll() is None:
+                if "node-kill" in kills:
+                    soak.killed = rng.choice(NODES)
+                    pid = node_pid(run_dir, soak.killed)
+                    if pid:
+                        os.kill(pid, signal.SIGKILL)
+                if "launcher-kill" in kills or "cut-imitation" in kills:
+                    if "cut-imitation" not in kills:
+                        time.sleep(rng.random() * 2)
+                    child.kill()
+        output, _ = child.communicate(timeout=900)
+        if page is not None:
+            soak.problems += page.problems()
+    finally:
         if child.poll() is None:
-            if "node-kill" in soak.faults:
-                soak.killed = rng.choice(NODES)
-                pid = node_pid(run_dir, soak.killed)
-                if pid:
-                    os.kill(pid, signal.SIGKILL)
-            if "launcher-kill" in soak.faults:
-                time.sleep(rng.random() * 2)
-                child.kill()
-    output, _ = child.communicate(timeout=900)
-    if forger:
-        forger.stop.set()
-        forger.join(30)
+            child.kill()
+        if page is not None:
+            page.close()
+        peer.stop.set()
+        peer.join(30)
     return (output.strip().splitlines() or [""])[-1]
 
 
 def first_segment(soak: Soak, runs: Path, domain: int, workdir: Path) -> None:
     """The run's first part with its faults. On a disk that fills, the first part runs on a
     200 kB tmpfs of its own (a mount namespace), and its folder is then moved to this disk;
-    the kills, if any, strike the first resume instead."""
+    the kills and forgeries, if any, strike the first resume instead."""
     argv = run_argv(soak.seed, runs, domain)
     run_dir = runs / f"soak{soak.seed}"
-    kills = "node-kill" in soak.faults or "launcher-kill" in soak.faults
     if "full-disk" not in soak.faults:
-        soak.outcome = segment(soak, argv, run_dir, domain, kills, "rogue" in soak.faults)
+        soak.outcome = segment(soak, argv, run_dir, domain, True, workdir)
         return
     mount = workdir / f"disk{soak.seed}"
     mount.mkdir()
@@ -218,11 +342,11 @@ def first_segment(soak: Soak, runs: Path, domain: int, workdir: Path) -> None:
               + " ".join(argv).replace(str(runs), str(mount))
               + f"; cp -a {mount}/soak{soak.seed} {runs}/")
     soak.outcome = segment(soak, ["unshare", "--user", "--map-root-user", "--mount", "sh",
-                                  "-c", script], run_dir, domain, False, "rogue" in soak.faults)
-    if kills:
+                                  "-c", script], run_dir, domain, False, workdir)
+    if set(soak.faults) - {"full-disk"}:
         soak.resumes += 1
         soak.outcome = segment(soak, [RUN, "--resume", str(run_dir), "--quiet", "--domain",
-                                      str(domain)], run_dir, domain, True, False)
+                                      str(domain)], run_dir, domain, True, workdir)
 
 
 def outcome_of(run_dir: Path) -> str:
@@ -239,130 +363,6 @@ def resume_until_finished(soak: Soak, run_dir: Path, domain: int) -> None:
                                str(domain)], capture_output=True, text=True, timeout=900)
         soak.outcome = (done.stderr.strip().splitlines() or [""])[-1]
     soak.outcome = outcome_of(run_dir)
-
-
-def signed_indices(run_dir: Path) -> list[int]:
-    """No project code: the mcap library reads every segment's MCAP file as far as it is
-    whole (a recorder that met a full disk leaves it truncated), rosbags decodes the
-    movements with the definitions the file embeds, and the stdlib's hmac keeps those the
-    run's key verifies; their indices in order, a re-execution replacing its index."""
-    from mcap.records import Channel, Message, Schema
-    from mcap.stream_reader import StreamReader
-    from rosbags.typesys import Stores, get_typestore
-
-    key = bytes.fromhex((run_dir / "record.key").read_text().strip())
-    seen: set[int] = set()
-    order: list[int] = []
-    files = sorted(run_dir.glob("bag*/*.mcap"),
-                   key=lambda f: (len(f.parent.name), f.parent.name))
-    for file in files:
-        store = get_typestore(Stores.ROS2_JAZZY)
-        schemas: dict[int, Schema] = {}
-        channels: dict[int, Channel] = {}
-        try:
-            with file.open("rb") as stream:
-                for record in StreamReader(stream, emit_chunks=False).records:
-                    if isinstance(record, Schema):
-                        schemas[record.id] = record
-                    elif isinstance(record, Channel):
-                        channels[record.id] = record
-                    elif isinstance(record, Message):
-                        channel = channels[record.channel_id]
-                        if channel.topic.rsplit("/", 1)[-1] != "movements":
-                            continue
-                        schema = schemas[channel.schema_id]
-                        if schema.name not in store.types:
-                            store.register(_definitions(schema.name, schema.data.decode()))
-                        m = store.deserialize_cdr(record.data, schema.name)
-                        if _signed(key, m) and int(m.index) not in seen:
-                            seen.add(int(m.index))
-                            order.append(int(m.index))
-        except Exception:  # the file ends where its recorder stopped: what came before counts
-            pass
-    return order
-
-
-def _definitions(name: str, text: str) -> dict:
-    """The types of a ros2msg schema as an MCAP file embeds them (the type, then its
-    dependencies after '=' lines)."""
-    from rosbags.typesys import get_types_from_msg
-
-    parts = text.split("=" * 80 + "\n")
-    types = dict(get_types_from_msg(parts[0], name))
-    for part in parts[1:]:
-        header, _, body = part.partition("\n")
-        types.update(get_types_from_msg(body, header.removeprefix("MSG: ").strip()))
-    return types
-
-
-def _signed(key: bytes, m) -> bool:
-    body = struct.pack("<QBBBQ", int(m.index), int(m.attempt), int(m.process), int(m.status),
-                       int(m.goal_index))
-    for values in (m.action, m.outcome, m.goal):
-        data = np.asarray(values, dtype="<f8").ravel()
-        body += struct.pack("<I", data.size) + data.tobytes()
-    mac = hmac.new(key, body, hashlib.sha256).digest()[:16]
-    return hmac.compare_digest(mac, bytes(bytearray(m.signature)))
-
-
-def reference_movements(seed: int) -> list[dict]:
-    """The movements of an uninterrupted run of the same seed and settings, made by the
-    single-process runner (the graph makes its very movements)."""
-    from sgim_nodes.core.learner_registry import make_learner
-    from sgim_nodes.core.runner import build_world, run
-    from sgim_nodes.core.social_config import SocialConfig
-
-    world = build_world("fishing", seed)
-    learner = make_learner(SGIM_D, world.env.action_dim, world.env.outcome_dim, seed,
-                           scale=world.scale)
-    records: list[dict] = []
-    run(learner, world, MOVEMENTS, EVAL_EVERY, seed, records.append,
-        SocialConfig(demonstration_period=PERIOD))
-    return [r for r in records if r["type"] == "movement"]
-
-
-def check(soak: Soak, run_dir: Path) -> None:
-    """The checks of the module's doc; problems appended to soak.problems."""
-    from sgim_nodes.bag.rebuild import rebuild_from_records
-    from sgim_nodes.bag.resume import load_run_folder
-
-    order = signed_indices(run_dir)
-    if order != list(range(1, MOVEMENTS + 1)):
-        soak.problems.append(f"signed movements are not 1..{MOVEMENTS} once each "
-                             f"({len(order)} found)")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        records = load_run_folder(run_dir)
-    state = rebuild_from_records(records)
-    if state.n_movements != MOVEMENTS:
-        soak.problems.append(f"rebuild holds {state.n_movements} movements")
-    meta = yaml.safe_load((run_dir / "metadata.yaml").read_text())
-    resumed = meta.get("resumed") or []
-    cut = resumed[0]["from_movement"] if resumed else MOVEMENTS
-    reference = reference_movements(soak.seed)
-    for m, r in zip(records.movements[:cut], reference[:cut], strict=False):
-        if not np.array_equal(m.action, np.asarray(r["action"])):
-            soak.problems.append(f"movement {m.index} (before the first interruption at "
-                                 f"{cut}) differs from the uninterrupted run")
-            break
-    turns = range(0, MOVEMENTS, PERIOD)
-    words = {d.movement_index for d in records.demonstrations if not d.help_request}
-    shown = {d.movement_index for d in records.demonstrations if d.shown}
-    taken = {d.movement_index for d in records.demonstrations_taken}
-    for k in turns:
-        if k not in words:
-            soak.problems.append(f"no teacher's word at turn {k}")
-        elif k in shown and k not in taken:
-            soak.problems.append(f"turn {k}: a demonstration shown, none taken")
-    points = {e.movement_index for e in records.evaluations}
-    missing = [p for p in range(0, MOVEMENTS + 1, EVAL_EVERY) if p not in points]
-    if missing:
-        soak.problems.append(f"no evaluation at {missing}")
-    if state.n_competences != len(records.competences):
-        soak.problems.append(f"the tree holds {state.n_competences} competences, the bag "
-                             f"{len(records.competences)}")
-    if state.region_map_matches() is False:
-        soak.problems.append("the rebuilt tree's leaves are not the last recorded map's")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -388,7 +388,7 @@ def main(argv: list[str] | None = None) -> int:
                 first_segment(soak, runs, reservation.domain_id, workdir)
                 resume_until_finished(soak, run_dir, reservation.domain_id)
                 if soak.finished:
-                    check(soak, run_dir)
+                    soak.problems += run_problems(run_dir, seed, MOVEMENTS, EVAL_EVERY, PERIOD)
             except Exception as error:  # a soak that breaks is reported, not fatal
                 soak.problems.append(f"the soak itself failed: {type(error).__name__}: {error}")
             soak.seconds = time.monotonic() - began
