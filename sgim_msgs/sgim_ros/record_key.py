@@ -41,7 +41,12 @@ SIGNATURE_BYTES = 16
 # teaching records were signed has their signatures empty, and is read as it was made.
 SIGNS_MOVEMENTS = 1
 SIGNS_TEACHING = 2
-TEACHING_TOPICS = ("demonstrations", "demonstrations_taken", "help_requests")
+SIGNS_COMPETENCES = 3
+SIGNED_SINCE = {"demonstrations": SIGNS_TEACHING, "demonstrations_taken": SIGNS_TEACHING,
+                "help_requests": SIGNS_TEACHING, "competences": SIGNS_COMPETENCES}
+"""The records, besides movements, that the node publishing them signs: those that teach the
+learner and the competences its interest is made of, with the signing level that added each."""
+TEACHING_TOPICS = tuple(SIGNED_SINCE)
 # What the simulator logs when it executes a movement again for a client that got no answer:
 # a signed re-execution its log does not show was made by another holder of the key.
 REEXECUTION_LOG = "re-executed movement {index} (attempt {attempt})"
@@ -106,9 +111,15 @@ def _text(value: Any) -> bytes:
 
 
 def teaching_signature(key: str, topic: str, record: Any) -> bytes:
-    """The signature of a Demonstration-like (``demonstrations``, ``demonstrations_taken``)
-    or HelpRequest-like (``help_requests``) record, fields read by name."""
-    if topic == "help_requests":
+    """The signature of a Demonstration-like (``demonstrations``, ``demonstrations_taken``),
+    HelpRequest-like (``help_requests``) or Competence-like (``competences``) record, fields
+    read by name."""
+    if topic == "competences":
+        body = (struct.pack("<QQdI?", int(record.goal_index), int(record.movement_index),
+                            float(record.competence), int(record.movements_used),
+                            bool(record.from_demonstration))
+                + _floats(record.goal) + _floats(record.reached) + _text(record.strategy))
+    elif topic == "help_requests":
         body = (struct.pack("<IQ", int(record.index), int(record.movement_index))
                 + _floats(record.goal) + _text(record.teacher) + _text(record.content))
     elif topic in ("demonstrations", "demonstrations_taken"):

@@ -47,7 +47,8 @@ def competence(goal_index: int, movement_index: int, rng: np.random.Generator,
         stamp=stamp(9), goal_index=goal_index, movement_index=movement_index,
         goal=rng.uniform(-1, 1, 2), reached=rng.uniform(-1, 1, 2),
         competence=float(-rng.uniform(0, 1)), movements_used=5,
-        from_demonstration=from_demonstration, strategy=strategy)
+        from_demonstration=from_demonstration, strategy=strategy,
+        signature=np.zeros(0, dtype=np.uint8))
 
 
 def region(rid: int, parent: int, lower, upper, leaf: bool):

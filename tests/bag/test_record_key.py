@@ -132,7 +132,7 @@ def test_teaching_records_are_signed_under_their_topic_and_checked_when_the_run_
     key = record_key.new_key()
     rng = np.random.default_rng(2)
     limits = Limits(record_key=key)
-    assert limits.signing == record_key.SIGNS_TEACHING
+    assert limits.signing == record_key.SIGNS_COMPETENCES
     demo = record_key.sign_teaching("demonstrations", samples.demonstration(3, 40, rng), key)
     ask = record_key.sign_teaching("help_requests",
                                    samples.help_request(2, 40, rng, "centre", "goal-only"), key)
@@ -152,7 +152,7 @@ def test_teaching_records_are_signed_under_their_topic_and_checked_when_the_run_
     assert older.signing == record_key.SIGNS_MOVEMENTS
     older = dataclasses.replace(older, record_key=key)
     assert check("demonstrations", unsigned, older) is None  # recorded before: as made
-    assert Limits.from_json(limits.to_json()).signing == record_key.SIGNS_TEACHING
+    assert Limits.from_json(limits.to_json()).signing == record_key.SIGNS_COMPETENCES
     assert check("demonstrations", unsigned, Limits(record_key="")) is None  # keyless run
 
 
@@ -187,3 +187,24 @@ def test_a_teaching_publisher_signs_what_any_node_publishes(monkeypatch):
     monkeypatch.delenv(record_key.ENV)
     publishes("help_requests").create(FakeNode()).publish(HelpRequest(index=1))
     assert bytes(sent[-1].signature) == b""  # a node started alone signs nothing
+
+
+def test_competences_are_signed_by_their_maker_and_checked_when_the_run_signs_them():
+    """The interest tree is made of competences: one a rogue publishes (or changes) is
+    quarantined; a bag recorded when only teaching records were signed is read as made."""
+    from tests.bag import samples
+
+    key = record_key.new_key()
+    rng = np.random.default_rng(4)
+    limits = Limits(record_key=key)
+    made = record_key.sign_teaching("competences", samples.competence(3, 40, rng), key)
+    assert check("competences", made, limits) is None
+    for forged in (dataclasses.replace(made, signature=np.zeros(0, dtype=np.uint8)),
+                   dataclasses.replace(made, competence=-0.01),
+                   dataclasses.replace(made, from_demonstration=True)):
+        problem = check("competences", forged, limits)
+        assert problem is not None and problem.kind == "unsigned", forged
+        assert "competences record at movement 40" in problem.detail
+    older = dataclasses.replace(limits, signing=record_key.SIGNS_TEACHING)
+    unsigned = dataclasses.replace(made, signature=np.zeros(0, dtype=np.uint8))
+    assert check("competences", unsigned, older) is None

@@ -76,7 +76,9 @@ def strategies(valid: bool) -> dict[str, st.SearchStrategy]:
         "competences": record(goal_index=index(), movement_index=index(0), goal=vectors(2),
                               reached=vectors(2),
                               competence=field(st.floats(-1, 0), st.floats()),
-                              movements_used=index(), from_demonstration=st.booleans()),
+                              movements_used=index(), from_demonstration=st.booleans(),
+                              strategy=st.sampled_from(["", "autonomous", "mimicry:rough"]),
+                              signature=st.just([])),
         "demonstrations": record(
             index=index(), movement_index=index(0), action=vectors(24), outcome=vectors(2),
             teaching_set_index=field(st.integers(-1, 25), st.integers(-3, 30)),
@@ -176,7 +178,9 @@ SIGNED_FIELDS = {"movements": ("index", "attempt", "process", "status", "goal_in
                                "outcome", "goal"),
                  "demonstrations": ("index", "movement_index", "teaching_set_index",
                                     "help_request", "action", "outcome", "source", "content"),
-                 "help_requests": ("index", "movement_index", "goal", "teacher", "content")}
+                 "help_requests": ("index", "movement_index", "goal", "teacher", "content"),
+                 "competences": ("goal_index", "movement_index", "competence", "movements_used",
+                                 "from_demonstration", "goal", "reached", "strategy")}
 SIGNED_FIELDS["demonstrations_taken"] = SIGNED_FIELDS["demonstrations"]
 
 
@@ -184,6 +188,10 @@ def _changed(value):
     """Another value of the same kind: what a forger changes in a signed record."""
     if isinstance(value, str):
         return value + "x"
+    if isinstance(value, bool):
+        return not value
+    if isinstance(value, float):
+        return value + 0.125 if value < -0.5 else value - 0.125
     if isinstance(value, int | np.integer):
         return int(value) + 1
     values = [float(v) for v in value]

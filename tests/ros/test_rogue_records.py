@@ -105,9 +105,10 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
                                    action=list(last.action), outcome=[0.99, 0.99],
                                    goal=list(last.goal), goal_index=last.goal_index,
                                    attempt=1, signature=list(last.signature)))
-    # Competences that must not reach the interest tree.
+    # Competences that must not reach the interest tree: malformed, and one well-formed that
+    # no node of the run signed.
     for goal, value in (([0.1, 0.1], float("nan")), ([0.1, 0.1], -1e12),
-                        ([0.1, 0.2, 0.3], -0.5)):
+                        ([0.1, 0.2, 0.3], -0.5), ([0.1, 0.1], -0.5)):
         competences.publish(Competence(goal=goal, competence=value, movements_used=2,
                                        movement_index=latest))
     # A rogue job on the explorer after a cancel-all of the running one.
@@ -185,7 +186,7 @@ def test_rogue_and_late_records_are_refused_and_the_run_stays_exact(
     assert q["demonstrations"]["out-of-bounds"] == 1
     assert q["demonstrations"]["unknown-teaching-index"] == 2
     assert q["demonstrations"]["unsigned"] == 3  # the forged answers, never taken
-    assert q["competences"] == {"non-finite": 1, "out-of-bounds": 1, "size": 1}
+    assert q["competences"] == {"non-finite": 1, "out-of-bounds": 1, "size": 1, "unsigned": 1}
     meta = yaml.safe_load((run_dir / "metadata.yaml").read_text())  # counted there too
     assert meta["outcome"] == "finished" and meta["quarantine"] == {
         "total": report["total_quarantined"], "by_topic": q, "write_errors": {}}

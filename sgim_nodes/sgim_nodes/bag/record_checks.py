@@ -31,7 +31,7 @@ from sgim_nodes.core.teaching import (
     TEACHER_CHOICES,
 )
 from sgim_ros import record_key
-from sgim_ros.record_key import SIGNS_MOVEMENTS, SIGNS_TEACHING
+from sgim_ros.record_key import SIGNS_COMPETENCES, SIGNS_MOVEMENTS
 
 BOUND = 1.0  # actions, outcomes, goals and regions live in [-1, 1]^n
 # Processes and statuses a published Movement may carry: the evaluator's and a human's
@@ -80,8 +80,9 @@ class Limits:
     record_key: str = field(default_factory=record_key.from_environment, repr=False,
                             compare=False)
     # Which records the run signs (sgim_ros/record_key.py): today's nodes sign the teaching
-    # records too; a bag that does not say so was recorded when only movements were signed.
-    signing: int = SIGNS_TEACHING
+    # records and the competences too; a bag that does not say so was recorded when only
+    # movements were signed.
+    signing: int = SIGNS_COMPETENCES
 
     def to_json(self) -> str:
         values = asdict(self)
@@ -470,10 +471,11 @@ def check(topic: str, record: Any, limits: Limits) -> Problem | None:
 def teaching_signature_problem(name: str, record: Any, limits: Limits) -> Problem | None:
     """A record that teaches the learner, in a run that signs them, must carry the signature
     of the run's node that made it: no other publisher can make one."""
-    if (not limits.record_key or limits.signing < SIGNS_TEACHING
-            or name not in record_key.TEACHING_TOPICS):
+    since = record_key.SIGNED_SINCE.get(name)
+    if not limits.record_key or since is None or limits.signing < since:
         return None
     if record_key.teaching_signed_by(limits.record_key, name, record):
         return None
-    return Problem("unsigned", f"{name} record {int(record.index)} is not signed by "
-                               "the run's node that makes it")
+    which = (f"record {int(record.index)}" if hasattr(record, "index")
+             else f"record at movement {int(record.movement_index)}")
+    return Problem("unsigned", f"{name} {which} is not signed by the run's node that makes it")
