@@ -8,8 +8,9 @@ drawn from the run's own seed, one to three of:
   cut-imitation    kill the launcher during a teacher's turn's imitation;
   rogue            publish bad records: forged re-executions, duplicates, far indices,
                    demonstrations with NaN or an unknown teaching entry, NaN competences;
-  forged-teaching  publish well-formed demonstrations nobody signed: at the teacher's turns,
-                   as answers to asks (also as an expert), and as demonstrations taken;
+  forged-teaching  publish well-formed records nobody signed: demonstrations at the
+                   teacher's turns, as answers to asks (also as an expert) and as taken, and
+                   competences;
   web-offer        run the web teacher's page beside the run, publish a forged movement, and
                    ask the page for an offer where the forgery lands;
   domain-clash     start a second run on the run's ROS domain while it runs;
@@ -190,8 +191,9 @@ class Peer(threading.Thread):
 
     def forged_teaching(self, out, last, rng) -> None:
         """Well-formed teaching nobody signed: the teacher's word at the next turn, an answer
-        to an ask (as the automatic teacher and as an expert), a demonstration 'taken'."""
-        from sgim_msgs.msg import Demonstration
+        to an ask (as the automatic teacher and as an expert), a demonstration 'taken', and
+        a competence for the interest tree."""
+        from sgim_msgs.msg import Competence, Demonstration
 
         turn = (last.index // PERIOD + 1) * PERIOD
         action = list(rng.uniform(-0.5, 0.5, 24))
@@ -203,6 +205,10 @@ class Peer(threading.Thread):
                 index=int(rng.integers(1, 40)), movement_index=int(at), action=action,
                 outcome=list(FORGED_OUTCOME), teaching_set_index=int(rng.integers(0, 40)),
                 source=source, help_request=ask))
+        out["competences"].publish(Competence(
+            goal_index=int(rng.integers(1, 40)), movement_index=last.index,
+            goal=list(FORGED_OUTCOME), reached=list(FORGED_OUTCOME), competence=0.0,
+            movements_used=1))
 
     def web_offer(self, out, last, rng) -> None:
         """An unsigned movement landing at FORGED_OUTCOME, far ahead, for the page to offer."""
