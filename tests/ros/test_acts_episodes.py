@@ -120,3 +120,42 @@ def test_mimicry_needs_an_action_and_a_resumed_run_numbers_after_the_recorded_re
     (folded,) = arbiter.competences
     assert (folded.competence, folded.movements_used, folded.strategy) == (
         -1.0, 0, "mimicry:centre")
+
+
+def test_a_forged_answer_first_is_refused_and_the_experts_own_is_taken(monkeypatch):
+    """A process answering each request at once as the asked expert, unsigned: its answer is
+    refused as unsigned, and the expert's own (signed with the run's key) is the one taken,
+    not refused as 'answered already'."""
+    from sgim_nodes.bag.record_checks import Limits
+    from sgim_nodes.bag.validation import LiveGate
+    from sgim_nodes.core.teaching import GOAL_ONLY
+    from sgim_ros import record_key
+
+    key = record_key.new_key()
+    episodes, arbiter = _episodes()
+    quarantined: list[str] = []
+    arbiter.gate = LiveGate(quarantined.append, Limits(record_key=key))
+    forged = _answer(1, "expert:west", 40, outcome=[0.9, 0.9])
+    real = _answer(1, "expert:west", 40, outcome=[0.2, -0.4])
+    for answer in (forged, real):  # what an expert shows for emulation: the outcome alone
+        answer.content, answer.teaching_set_index = GOAL_ONLY, -1
+    record_key.sign_teaching("demonstrations", real, key)
+    arbiter.deliver = [forged, real]
+    taken, jobs = [], []
+
+    async def run_job(_client, goal, _name):
+        jobs.append(goal)
+        return SimpleNamespace(goals_attempted=1)
+
+    arbiter.publish_taken, arbiter.run_job = taken.append, run_job
+    arbiter.reach, arbiter.goals_folded, arbiter.cap = None, 0, lambda: 10
+    asyncio.run(episodes.run(_goal("emulation:west"), 0.3))
+
+    (request,) = arbiter.requests
+    assert request.content == GOAL_ONLY
+    assert len(arbiter.refusals) == 1 and "not signed" in arbiter.refusals[0], arbiter.refusals
+    assert "answered already" not in "\n".join(arbiter.refusals)
+    assert len(quarantined) == 1 and "quarantined" in quarantined[0]
+    assert taken == [real]  # the expert's answer, not the forgery's
+    (job,) = jobs
+    assert list(job.demonstrated) == [0.2, -0.4]  # the explorer reaches the expert's outcome
