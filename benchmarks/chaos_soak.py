@@ -298,8 +298,10 @@ def segment(soak: Soak, argv: list[str], run_dir: Path, domain: int, first: bool
     page = WebPage(run_dir, domain, workdir) if "web-offer" in kinds else None
     try:
         if first and "domain-clash" in soak.faults:
-            deadline = time.monotonic() + 120
-            while progress(run_dir) < 10 and child.poll() is None \
+            # Once this launch moves (a resume's log starts where the run stopped), it holds
+            # its domain: the second run must then be refused.
+            deadline, start = time.monotonic() + 120, progress(run_dir)
+            while progress(run_dir) < start + 10 and child.poll() is None \
                     and time.monotonic() < deadline:
                 time.sleep(0.2)
             clash(soak, run_dir.parent, domain)
