@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import portable
+from .acts_episode import EMULATE, IMITATE, after_answer
 from .competence import start_distance
 from .config import LearnerConfig
 from .environment import ResultLike, is_success
@@ -42,7 +43,7 @@ from .imitation import Imitation
 from .learner_base import DEMONSTRATION, Learner, region_tree_for
 from .random_streams import component_rng
 from .scale import WorldScale
-from .strategies import AUTONOMOUS, EMULATION, MIMICRY, Strategy, all_strategies
+from .strategies import AUTONOMOUS, MIMICRY, Strategy, all_strategies
 from .strategy_choice import PairChoice, StrategyChooser
 from .strategy_regions import StrategyRegions
 
@@ -210,23 +211,20 @@ class SgimActsLearner(Learner):
                              f"action (mimicry); the answer shows none")
         self.pending = None
         episode = self.episode
-        usable = answer is not None and (
-            answer.action is not None if kind == MIMICRY else answer.outcome is not None)
-        episode.log.answered = usable
-        if not usable:
-            self.n_unanswered += 1
-            self._end(episode)
-            return
         c = self.config
-        if kind == MIMICRY:
-            if answer.outcome is not None:
-                self.memory.add(answer.action, answer.outcome, DEMONSTRATION)
-            episode.process = Imitation(answer.action, answer.outcome, c.imitation_count,
+        step = (after_answer(kind, None, None, c.imitation_count) if answer is None else
+                after_answer(kind, answer.action, answer.outcome, c.imitation_count))
+        episode.log.answered = step.kind in (IMITATE, EMULATE)
+        if step.stores:
+            self.memory.add(step.action, step.outcome, DEMONSTRATION)
+        if step.kind == IMITATE:
+            episode.process = Imitation(step.action, step.outcome, step.repetitions,
                                         c.imitation_epsilon, self.rngs.imitation)
+        elif step.kind == EMULATE:
+            episode.process = self._attempt(step.outcome)
         else:
-            assert kind == EMULATION
-            episode.process = self._attempt(answer.outcome)
-        if episode.done:  # e.g. imitation_count 0: nothing to move
+            self.n_unanswered += 1
+        if episode.done:  # none there, or imitation_count 0: nothing to move
             self._end(episode)
 
     # --- the shared learner API ---

@@ -21,6 +21,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
+from .acts_episode import MAX_REQUESTS_IN_A_ROW
 from .acts_learner import SgimActsLearner
 from .config import LearnerConfig
 from .environment import is_success
@@ -34,11 +35,6 @@ EXPERTS_BY_WORLD: dict[str, tuple[ExpertSpec, ...]] = {
     "fishing": FISHING_EXPERTS, "planar-arm": ARM_EXPERTS,
     **{name: ARM_EXPERTS for name in ARMS}}
 """The teachers each world gives SGIM-ACTS (experts.py), over its teaching set."""
-
-
-MAX_REQUESTS_IN_A_ROW = 10_000
-"""Requests without a movement after which the run stops: only a learner without the
-autonomous strategy whose teachers all answer "none there" gets there (else it would loop)."""
 
 
 def experts_for(env: str, world: Any, seed: int,

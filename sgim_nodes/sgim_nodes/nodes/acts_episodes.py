@@ -3,8 +3,8 @@
 The goal generator draws each episode's (strategy, goal) (core/strategy_choice.py) when the
 explorer asks for its next goal; an autonomous one the explorer attempts at once, a social
 one ends its reach_goal job and comes here (ReachGoal.Result.social), with the memory's
-distance to the goal when it was chosen. The arbiter then drives the episode as the core's
-SgimActsLearner does:
+distance to the goal when it was chosen. The arbiter then translates the episode's steps, the
+core's rules that SgimActsLearner carries out too (core/acts_episode.py):
 
 - it asks the strategy's teacher on `help_requests` (HelpRequest naming the teacher, and
   content means-and-goal for mimicry, goal-only for emulation) and waits for its answer on
@@ -26,11 +26,16 @@ from sgim_msgs.action import Imitate, ReachGoal
 from sgim_msgs.msg import Competence, Demonstration, Goal, HelpRequest
 from sgim_msgs.srv import RegisterDemonstration
 from sgim_nodes.bag.record_checks import expert_source
-from sgim_nodes.core.teaching import GOAL_ONLY, MEANS_AND_GOAL
+from sgim_nodes.core.acts_episode import (
+    EMULATE,
+    MAX_REQUESTS_IN_A_ROW,
+    NONE_THERE,
+    after_answer,
+    folds,
+    request_content,
+)
 from sgim_nodes.nodes.help_asks import HELP_REQUESTS
 from sgim_nodes.nodes.ros_glue import floats, vec
-
-MAX_REQUESTS_IN_A_ROW = 10_000  # core/acts_runner.MAX_REQUESTS_IN_A_ROW
 
 
 class ActsEpisodes:
@@ -91,37 +96,38 @@ class ActsEpisodes:
             raise RuntimeError(f"sgim-acts made {MAX_REQUESTS_IN_A_ROW} requests in a row and "
                                "none gave a movement: its teachers answer none there and it "
                                "has no autonomous strategy")
-        answer = await self._ask(goal, teacher, kind == "mimicry")
-        usable = (len(answer.action) if kind == "mimicry" else len(answer.outcome)) > 0
-        if not usable:  # none there: the request cost, the pair shows no progress
+        answer = await self._ask(goal, teacher, kind)
+        step = after_answer(kind, vec(answer.action) if len(answer.action) else None,
+                            vec(answer.outcome) if len(answer.outcome) else None,
+                            node.config.imitation_count)
+        if step.kind == NONE_THERE:  # the request cost, the pair shows no progress
             self._publish(goal, None, 0)
             return
         self.in_a_row = 0
         node.publish_taken(answer)
-        if kind == "emulation":  # the explorer reaches the outcome, measured at the goal
+        if step.kind == EMULATE:  # the explorer reaches the outcome, measured at the goal
             result = await node.run_job(node.reach, emulation_job(
                 goal, start, answer.outcome, node.cap(), node.count, node.goals_folded),
                 "reach_goal")
             node.goals_folded += result.goals_attempted
             return
-        if len(answer.outcome):  # its cast landed: the memory holds it, as SGIM-D's does
+        if step.stores:  # its cast landed: the memory holds it, as SGIM-D's does
             reply = await node.call(node.register_client,
                                     RegisterDemonstration.Request(demonstration=answer),
                                     "register_demonstration")
             if not reply.accepted:
                 node.get_logger().error(f"the explorer refused demonstration {answer.index}: "
                                         f"{reply.message}")
-        repetitions = min(node.config.imitation_count, node.total - node.count)
-        if repetitions <= 0:
-            if node.config.imitation_count == 0:
-                self._publish(goal, None, 0)
-            return
-        result: Imitate.Result = await node.imitation(answer, repetitions, goal.point)
-        if result.movements_used == node.config.imitation_count:  # not cut by the budget
+        repetitions = min(step.repetitions, node.total - node.count)  # never past the budget
+        made, best = 0, None
+        if repetitions > 0:
+            result: Imitate.Result = await node.imitation(answer, repetitions, goal.point)
+            made = result.movements_used
             best = vec(result.best_outcome) if len(result.best_outcome) else None
-            self._publish(goal, best, result.movements_used, start)
+        if folds(step, made):
+            self._publish(goal, best, made, start)
 
-    async def _ask(self, goal: Goal, teacher: str, wants_action: bool) -> Demonstration:
+    async def _ask(self, goal: Goal, teacher: str, kind: str) -> Demonstration:
         node = self.arbiter
         self.requests += 1
         index = self.requests
@@ -130,8 +136,7 @@ class ActsEpisodes:
                                f"({goal.strategy}, goal {[round(x, 3) for x in goal.point]})")
         self._out.publish(HelpRequest(
             stamp=node.get_clock().now().to_msg(), index=index, movement_index=node.count,
-            goal=list(goal.point), teacher=teacher,
-            content=MEANS_AND_GOAL if wants_action else GOAL_ONLY))
+            goal=list(goal.point), teacher=teacher, content=request_content(kind)))
         await node.waits.until(lambda: index in self.answers, node.p["teacher_timeout"],
                                f"the answer of teacher {teacher!r} to request {index} "
                                f"(is its expert node running?)")
