@@ -160,7 +160,8 @@ class SgimActsLearner(Learner):
                                        [s.name for s in self.strategies])
         self.chooser = StrategyChooser(self.regions, self.strategies,
                                        (c.p_mode1, c.p_mode2, c.p_mode3),
-                                       c.distances(self.scale).mode3_radius)
+                                       c.distances(self.scale).mode3_radius,
+                                       c.strategy_choice_order, c.strategy_value)
         self.choice_rng = component_rng(seed, "strategies")
         self.probe_scale = probe_scale_for(c, self.scale, action_dim)
         self.episode: Episode | None = None
