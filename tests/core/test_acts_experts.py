@@ -143,3 +143,8 @@ def test_the_rough_fishing_teacher_lands_about_two_noise_units_off():
     rough, precise = offsets("rough"), np.concatenate([offsets("centre"), offsets("west")])
     assert 1.0 < np.median(rough) < 3.5, np.median(rough)
     assert np.median(precise) < 0.6, np.median(precise)
+
+
+def test_a_spec_names_the_parts_it_knows_and_no_part_when_it_cuts_by_axis():
+    assert ExpertSpec("w", "parts:west+south+pond").named_parts == ("west", "south", "pond")
+    assert ExpertSpec("r", "all").named_parts == ExpertSpec("e", "high:0").named_parts == ()

@@ -149,6 +149,27 @@ def test_the_request_api_refuses_answers_it_did_not_ask_for():
         made.on_answer(request, None)
 
 
+def test_an_episode_can_be_begun_with_a_strategy_and_goal_the_chooser_did_not_choose():
+    from sgim_nodes.core.strategies import Strategy
+    from sgim_nodes.core.strategy_choice import PairChoice
+
+    made = learner(["autonomous", "mimicry:t"])
+    leaf = made.regions.leaves[0]
+    goal = np.array([0.3, -0.2])
+    mimicry = made.strategies[1]
+    request = made.begin(PairChoice(mimicry, goal, 0, 0, leaf))
+    assert request.strategy == mimicry and np.array_equal(request.goal, goal)
+    with pytest.raises(RuntimeError, match="current episode has not ended"):
+        made.begin(PairChoice(made.strategies[0], goal, 0, 0, leaf))
+    made.on_answer(request, None)  # "none there": the episode ends with competence -1
+    assert (made.choices[-1].strategy, made.choices[-1].competence) == ("mimicry:t", -1.0)
+    assert made.regions.history("mimicry:t", leaf).goals[0].tolist() == goal.tolist()
+    with pytest.raises(ValueError, match="emulation:t is not one of the learner's"):
+        made.begin(PairChoice(Strategy("emulation", "t", 5.0), goal, 0, 0, leaf))
+    assert made.begin(PairChoice(made.strategies[0], goal, 0, 0, leaf)) is None  # autonomous
+    assert made.request() is None and made.episode.choice.strategy.name == "autonomous"
+
+
 def test_make_learner_refuses_unknown_teachers_and_strategies_for_other_learners():
     with pytest.raises(ValueError, match="unknown teacher 'north'"):
         learner(["mimicry:north"], teachers=("west",))

@@ -161,7 +161,8 @@ class SgimActsLearner(Learner):
                                        [s.name for s in self.strategies])
         self.chooser = StrategyChooser(self.regions, self.strategies,
                                        (c.p_mode1, c.p_mode2, c.p_mode3),
-                                       c.distances(self.scale).mode3_radius)
+                                       c.distances(self.scale).mode3_radius,
+                                       c.strategy_choice_order, c.strategy_value)
         self.choice_rng = component_rng(seed, "strategies")
         self.probe_scale = probe_scale_for(c, self.scale, action_dim)
         self.episode: Episode | None = None
@@ -180,7 +181,17 @@ class SgimActsLearner(Learner):
             return self.pending
         if self.episode is not None and not self.episode.done:
             return None
-        choice = self.chooser.sample(self.choice_rng)
+        return self.begin(self.chooser.sample(self.choice_rng))
+
+    def begin(self, choice: PairChoice) -> Request | None:
+        """Start the episode ``choice`` names and return its request, if it asks a teacher.
+        request() begins the chooser's choices; a tool that compares strategies on the same
+        goals begins its own (strategy_precheck.py)."""
+        if self.pending is not None or (self.episode is not None and not self.episode.done):
+            raise RuntimeError("begin: the learner's current episode has not ended")
+        if choice.strategy not in self.strategies:
+            raise ValueError(f"begin: {choice.strategy.name} is not one of the learner's "
+                             f"strategies")
         closest = self.memory.closest_distance(choice.goal)
         region = choice.region
         log = ChoiceLog(self.n_movements, choice.strategy.name, choice.strategy.teacher,

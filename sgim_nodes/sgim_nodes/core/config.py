@@ -28,6 +28,8 @@ from .scale import WorldScale
 INVERSE_MODELS = ("nearest", "reliable", "local-linear")
 STEP_CHECKS = ("held-out", "none")
 OPTIMISERS = ("subspace", "local-linear", "nelder-mead", "random-search")
+CHOICE_ORDERS = ("pair", "region-first")
+STRATEGY_VALUES = ("interest", "gain")
 
 
 @dataclass(frozen=True)
@@ -276,7 +278,7 @@ class LearnerConfig:
     imitations still land within the world's noise of the demonstrated outcome, while a wider
     one scatters them (docs/notes/measurements.md, "how far imitations land")."""
 
-    # --- SGIM-ACTS: the cost of each kind of strategy (strategies.py) ---
+    # --- SGIM-ACTS: each kind of strategy's cost (strategies.py) and the choice ---
     acts_cost_autonomous: float = 1.0
     """Cost of one autonomous episode (SAGG-RIAC's goal attempt), in movement-equivalents:
     the unit. SGIM-ACTS (Nguyen & Oudeyer 2012) divides each (strategy, region) pair's
@@ -293,6 +295,22 @@ class LearnerConfig:
     whole action in a form the learner can copy (kinesthetic or teleoperated), about twice the
     effort of showing an effect (emulation). Chosen, not measured. A cost weighs the
     strategy's interest and is tallied per request; it spends no movements of the budget."""
+    strategy_choice_order: str = "pair"
+    """How SGIM-ACTS chooses an episode's region and strategy (strategy_choice.py): ``pair``
+    draws a (region, strategy) pair at once by value / cost (eq. 3 over the pairs; mode 2
+    draws the strategy uniformly), the SGIM lineage's choice and the default; ``region-first``
+    chooses the goal as SAGG-RIAC does in all three modes (its region by the region's own
+    interest), then, in that region, the strategy of largest value / cost, ties drawn at
+    random: what to learn, then how and from whom, so that no mode draws a teacher blindly.
+    A variant to compare, chosen, not measured."""
+    strategy_value: str = "interest"
+    """What a (strategy, region) pair is worth before its cost divides it: ``interest``, eq.
+    2's competence progress on the pair's history (the SGIM lineage's, the default), or
+    ``gain``, the mean of 1 + competence over the pair's last zeta episodes: how near its
+    goals the strategy brings the learner. A teacher whose help is steadily good keeps a
+    high gain, while its interest, a change of competence, falls to zero once that help is
+    steady. An untried pair is worth the largest gain, 1, so that a teacher is tried where
+    the learner's own gain is low. A variant to compare, chosen, not measured."""
 
     # --- memory index ---
     memory_rebuild_fraction: float = 0.5
@@ -359,13 +377,17 @@ RANGES: dict[str, Range] = {
     "optimiser": Range(choices=OPTIMISERS),
     "competence_reference": Range(choices=("memory", "fixed")),
     "region_split": Range(choices=SPLIT_QUALITIES),
+    "strategy_choice_order": Range(choices=CHOICE_ORDERS),
+    "strategy_value": Range(choices=STRATEGY_VALUES),
 }
 """The range of every LearnerConfig field, declared once (the rules that tie fields together
 are TIES)."""
 
 
 BEFORE_IT_EXISTED: dict[str, Any] = {"local_step_check": "none", "local_rank_min_casts": 0.0,
-                                     "local_step_support": 0.0}
+                                     "local_step_support": 0.0,
+                                     "strategy_choice_order": "pair",
+                                     "strategy_value": "interest"}
 """For a field added after runs were recorded: the value that does what the learner did before
 the field existed. A run recorded then, resumed today, goes on as it ran (recorded_learner)."""
 

@@ -131,6 +131,13 @@ class ExpertSpec:
     precision: float = 0.0
     radius_size: float = math.inf
 
+    @property
+    def named_parts(self) -> tuple[str, ...]:
+        """The parts of the world a ``parts:`` spec names, () for any other part: where the
+        expert's own goals lie, for tools that draw goals there."""
+        side, _, names = self.part.partition(":")
+        return tuple(names.split("+")) if side == "parts" else ()
+
     def rows(self, outcomes: np.ndarray,
              part_of: Callable[[np.ndarray], str] | None = None) -> np.ndarray:
         if self.part == "all":
@@ -140,7 +147,7 @@ class ExpertSpec:
             if part_of is None:
                 raise ValueError(f"expert {self.name!r}: part {self.part!r} names parts of a "
                                  "world, and this world names none")
-            wanted = set(axis.split("+"))
+            wanted = set(self.named_parts)
             return np.flatnonzero([part_of(o) in wanted for o in np.asarray(outcomes)])
         if side not in ("low", "high") or not axis.isdigit():
             raise ValueError(f"expert {self.name!r}: part must be all, low:<axis>, "

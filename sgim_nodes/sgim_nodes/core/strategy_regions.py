@@ -14,6 +14,9 @@ competence at the region's goals changes when it uses that strategy there. Desig
 - The interest of a pair is eq. 2 (region_tree.interest) on that pair's history alone, with
   the tree's zeta and noise correction; dividing it by the strategy's cost is the choice's
   business (strategy_choice.py), so the plain progress stays readable here.
+- The gain of a pair (LearnerConfig.strategy_value ``gain``) is the mean of 1 + competence
+  over the last zeta episodes of its history: how near its goals the strategy brought the
+  learner there, not how fast that changed. A pair without history has UNTRIED_GAIN.
 """
 
 from __future__ import annotations
@@ -24,6 +27,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .region_tree import Region, RegionTree, interest
+
+UNTRIED_GAIN = 1.0
+"""The gain of a pair never tried in its region: the largest a gain can be (competence 0, a
+full success), so that a strategy is tried at least once where the tried ones gain little
+instead of being judged on no evidence."""
 
 
 @dataclass
@@ -99,6 +107,21 @@ class StrategyRegions:
     def interests(self) -> np.ndarray:
         """(leaves, strategies): each pair's interest, leaves in tree order."""
         return np.array([[self.interest(s, leaf) for s in self.strategies]
+                         for leaf in self.tree.leaves]).reshape(len(self.tree.leaves),
+                                                                len(self.strategies))
+
+    def gain(self, strategy: str, region: Region) -> float:
+        """The mean of 1 + competence over the pair's last zeta episodes (competences lie in
+        [-1, 0], so gains in [0, 1]); UNTRIED_GAIN when the pair has none."""
+        competences = self.history(strategy, region).competences
+        if not competences:
+            return UNTRIED_GAIN
+        window = np.asarray(competences[-self.tree.zeta:], dtype=float)
+        return float(np.mean(1.0 + window))
+
+    def gains(self) -> np.ndarray:
+        """(leaves, strategies): each pair's gain, leaves in tree order."""
+        return np.array([[self.gain(s, leaf) for s in self.strategies]
                          for leaf in self.tree.leaves]).reshape(len(self.tree.leaves),
                                                                 len(self.strategies))
 

@@ -77,7 +77,8 @@ def acts_choice(config, scale, teachers: str):
     regions = StrategyRegions(region_tree_for(config, scale), [s.name for s in strategies])
     return regions, StrategyChooser(regions, strategies,
                                     (config.p_mode1, config.p_mode2, config.p_mode3),
-                                    config.distances(scale).mode3_radius)
+                                    config.distances(scale).mode3_radius,
+                                    config.strategy_choice_order, config.strategy_value)
 
 GOALS, COMPETENCES = publishes("goals"), subscribes("competences")
 READY, CHOOSE = serves("goal_generator_ready"), serves("choose_goal")
