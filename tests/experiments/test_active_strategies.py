@@ -33,22 +33,25 @@ GRID = """\
 TURNS = "sgim-d [teacher_turns=centre,west,rough]"
 
 
-def test_the_pinned_experiment_makes_50_runs_and_shares_the_study_s_30():
+def test_the_pinned_experiment_makes_80_runs_and_shares_the_study_s_30():
     exp = pinned.find("active_strategies")
     assert exp.maker == "graph" and exp.pages == ("docs/active_strategies.md",)
     assert exp.report in REPORTS and exp.data_problems() == []
     assert exp.data == pinned.find("study").data == pinned.find("social_modes").data
     assert exp.run_timeout == pinned.find("study").run_timeout
     specs = exp.graph_runs
-    assert len(specs) == 50
+    assert len(specs) == 80
     assert {(s.movements, s.eval_every) for s in specs} == {(5000, 250)}
     by_arm: dict[tuple, list[int]] = {}
     for s in specs:
         by_arm.setdefault((s.learner, s.params), []).append(s.seed)
+    region_first, gain = ("strategy_choice_order", "region-first"), ("strategy_value", "gain")
     assert by_arm == {arm: list(range(10)) for arm in [
-        ("sgim-acts", ()), ("sgim-d", (("teacher_turns", "centre,west,rough"),)),
+        ("sgim-acts", ()), ("sgim-acts", (region_first,)), ("sgim-acts", (gain,)),
+        ("sgim-acts", (region_first, gain)),
+        ("sgim-d", (("teacher_turns", "centre,west,rough"),)),
         ("sgim-d", ()), ("saggriac", ()), ("demo-only", ())]}
-    turns = next(s for s in specs if s.params)
+    turns = next(s for s in specs if s.learner == "sgim-d" and s.params)
     assert turns.demonstration_period == 150 and "teacher_turns=centre,west,rough" in turns.argv()
     mine, study = exp.run_fingerprints(), pinned.find("study").run_fingerprints()
     shared = {name for name in mine if study.get(name) == mine[name]}
