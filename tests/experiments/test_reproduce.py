@@ -193,3 +193,15 @@ def test_a_chunk_of_another_learner_is_made_again(repo, capsys, monkeypatch):
     assert calls == [jobs[1].name]
     assert "casts-seed3-chunk1: its learner differs" in capsys.readouterr().err
     assert len(list((runs / makers.UNLIKE_DIR).iterdir())) == 1
+
+
+def test_report_only_without_runs_says_what_to_make_in_one_line(repo, capsys):
+    """On a fresh clone no run is made: --report-only says so in one line, with the command
+    that makes them, exit code 2, and leaves the page as it is."""
+    before = (repo / "docs/pond.md").read_text()
+    assert cli.main(["pond", "--report-only", "--runs-dir", str(repo / "nothing")]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    (line,) = [x for x in err.splitlines() if "nothing to report from" in x]
+    assert "`ros_ws/reproduce.sh pond` makes its" in line
+    assert (repo / "docs/pond.md").read_text() == before

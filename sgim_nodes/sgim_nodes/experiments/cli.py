@@ -218,6 +218,7 @@ def pin(exp: Experiment) -> None:
 
 def reproduce(exp: Experiment, args: argparse.Namespace, command: str) -> int:
     from sgim_nodes.experiments.reports import maker
+    from sgim_nodes.experiments.reports.graph_study import NotPinned
 
     problems = exp.data_problems()
     if problems:
@@ -238,7 +239,15 @@ def reproduce(exp: Experiment, args: argparse.Namespace, command: str) -> int:
     if args.runs_only:
         return 0
     say(f"{exp.name}: analysing {runs_dir}")
-    report = maker(exp.report)(exp, runs_dir, FIGURES)
+    try:
+        report = maker(exp.report)(exp, runs_dir, FIGURES)
+    except (NotPinned, FileNotFoundError) as missing:
+        if not args.report_only:
+            raise
+        say(f"{exp.name}: nothing to report from: {str(missing).splitlines()[0]}. "
+            f"`ros_ws/reproduce.sh {exp.name}` makes its {len(exp.run_fingerprints())} runs "
+            "(resumable), then --report-only makes its pages again")
+        return 2
     wall = time.monotonic() - began
     notes = [*report.notes, f"runs in `{_shown(runs_dir)}`"]
     outputs = [*exp.pages, _shown(FIGURES)]  # what this command writes is not a change
