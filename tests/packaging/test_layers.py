@@ -116,4 +116,4 @@ def test_relative_and_lazy_imports_are_read():
     core = imports()
     assert "sgim_nodes.core.learner_registry" in core["sgim_nodes.core.runner"]  # relative
     assert "sgim_nodes.core.acts_runner" in core["sgim_nodes.core.runner"]  # in main()
-    assert "sgim_nodes.core.portable" in core["sgim_nodes.core.acts_learner"]  # from . import
+    assert "sgim_nodes.core.portable" in core["sgim_nodes.core.competence"]  # from . import

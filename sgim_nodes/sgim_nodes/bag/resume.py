@@ -26,7 +26,7 @@ from sgim_nodes.bag.run_folder import (  # noqa: F401 - the launcher's names for
     next_segment,
     segments,
 )
-from sgim_nodes.core import portable
+from sgim_nodes.core.competence import NearestOutcome
 from sgim_nodes.core.config import LearnerConfig
 from sgim_nodes.core.environment import PROCESS_CODES
 from sgim_nodes.core.teaching import OWN_PROCESSES
@@ -142,14 +142,10 @@ class CutImitation:
 
     def best_outcome(self) -> np.ndarray | None:
         """The made imitation's outcome nearest the demonstrated one (the first of equals)."""
-        goal = np.asarray(self.demonstration.outcome, float)
-        best, distance = None, float("inf")
+        nearest = NearestOutcome(np.asarray(self.demonstration.outcome, float))
         for m in self.made:
-            if m.status == 0 and len(m.outcome) == len(goal):
-                d = portable.norm(np.asarray(m.outcome, float) - goal)
-                if d < distance:
-                    best, distance = np.asarray(m.outcome, float), d
-        return best
+            nearest.observe(m)
+        return nearest.outcome
 
     def describe(self) -> str:
         d = self.demonstration

@@ -32,11 +32,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import portable
 from .acts_episode import EMULATE, IMITATE, after_answer
-from .competence import start_distance
+from .competence import NearestOutcome, start_distance
 from .config import LearnerConfig
-from .environment import ResultLike, is_success
+from .environment import ResultLike
 from .experts import ExpertAnswer
 from .goal_reaching import GoalAttempt, probe_scale_for
 from .imitation import Imitation
@@ -94,24 +93,6 @@ class ChoiceLog:
 
     def to_record(self) -> dict:
         return {"type": "strategy_choice", **self.__dict__}
-
-
-@dataclass
-class NearestOutcome:
-    """The outcome nearest ``point`` over an episode's successful movements (the first of
-    equally near ones): every strategy is measured at the goal the learner chose, whatever
-    its movements aimed at. The graph's nodes measure with it too."""
-
-    point: np.ndarray
-    distance: float = float("inf")
-    outcome: np.ndarray | None = None
-
-    def observe(self, result: ResultLike) -> None:
-        if is_success(result):
-            outcome = np.asarray(result.outcome, dtype=float)
-            d = portable.norm(outcome - self.point)
-            if d < self.distance:
-                self.distance, self.outcome = d, outcome.copy()
 
 
 @dataclass

@@ -25,10 +25,12 @@ is then nonzero exactly where the learner is changing what it can do.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from . import portable
+from .environment import ResultLike, is_success
 
 
 def competence(goal: np.ndarray, best_outcome: np.ndarray | None, start_distance: float,
@@ -56,3 +58,22 @@ def start_distance(closest_distance: float, goal: np.ndarray, centre: np.ndarray
     if math.isfinite(closest_distance):
         return float(closest_distance)
     return portable.norm(np.asarray(goal, float) - np.asarray(centre, float))
+
+
+@dataclass
+class NearestOutcome:
+    """The outcome nearest ``point`` over an episode's successful movements (the first of
+    equally near ones): every strategy is measured at the goal the learner chose, whatever
+    its movements aimed at. The graph's nodes measure with it too, and a resumed run measures
+    the imitations a kill cut."""
+
+    point: np.ndarray
+    distance: float = float("inf")
+    outcome: np.ndarray | None = None
+
+    def observe(self, result: ResultLike) -> None:
+        if is_success(result):
+            outcome = np.asarray(result.outcome, dtype=float)
+            d = portable.norm(outcome - self.point)
+            if d < self.distance:
+                self.distance, self.outcome = d, outcome.copy()

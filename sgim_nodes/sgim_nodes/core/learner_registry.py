@@ -265,8 +265,8 @@ register(LearnerKind(
     SGIM_ACTS, "SGIM-ACTS", None, _acts,
     "chooses for each episode a goal region and a strategy, asking teachers of its own",
     host=EPISODES, chooses_teachers=True, compared=False,
-    own_modules=("acts_learner", "acts_runner", "experts", "strategies", "strategy_choice",
-                 "strategy_regions", "teacher_turns")))
+    own_modules=("acts_episode", "acts_learner", "acts_runner", "experts", "strategies",
+                 "strategy_choice", "strategy_regions", "teacher_turns")))
 
 OWN_NAMES = tuple(_KINDS)
 """The learners this project declares (the others come from other packages)."""

@@ -5,7 +5,7 @@ driven movement by movement through the simulator's `execute_action` service, re
 imitation movements aimed at the demonstrated outcome. A means-only demonstration (issue 14)
 comes without its outcome: its imitation aims at no goal (the movements' goal is empty) and
 has no best outcome, as the core's. SGIM-ACTS's mimicry gives `measure_at`, the goal it
-chose: the best outcome is then the one nearest that goal (core/acts_learner.NearestOutcome),
+chose: the best outcome is then the one nearest that goal (core/competence.NearestOutcome),
 whatever the demonstration showed. A cancel is honoured at the next movement boundary.
 
 Interfaces:
@@ -87,7 +87,7 @@ class ImitationNode(AsyncNode):
                         self.config.imitation_epsilon, self.rng)
         measured = None
         if len(request.measure_at):
-            from sgim_nodes.core.acts_learner import NearestOutcome
+            from sgim_nodes.core.competence import NearestOutcome
 
             measured = NearestOutcome(vec(request.measure_at))
         while not job.done:

@@ -24,7 +24,7 @@ social one ends the job before any movement, handing the goal and the memory's d
 back to the arbiter (`social`), which asks the teacher. An emulation comes back as a job of
 one goal: the teacher's outcome to reach (`demonstrated`) and the chosen goal (`chosen`).
 Every SGIM-ACTS episode's competence is measured at the goal the learner chose, against the
-memory's distance to it when chosen (core/acts_learner.NearestOutcome), and names the strategy.
+memory's distance to it when chosen (core/competence.NearestOutcome), and names the strategy.
 
 Interfaces:
   subscribes  movements              (sgim_msgs/Movement)
@@ -211,7 +211,7 @@ class LowLevelExplorer(AsyncNode):
                               self.scale, self.rng, self.action_size, self.probe_scale)
         measured = None
         if start is not None:
-            from sgim_nodes.core.acts_learner import NearestOutcome
+            from sgim_nodes.core.competence import NearestOutcome
 
             measured = NearestOutcome(vec(chosen.point))
         used = 0
