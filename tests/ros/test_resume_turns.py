@@ -20,6 +20,27 @@ RUN = str(REPO / "ros_ws" / "run_experiment.sh")
 PERIOD, MOVEMENTS = 50, 120
 
 
+def start_run(ros_processes, ros_domain, tmp_path):
+    """SGIM-D with a teacher every PERIOD, in tmp_path/cut; a strict teacher (a small
+    tolerance) shows something at each turn."""
+    return ros_processes.start(
+        "run-cut", [RUN, "sgim-d", "--seed", "1", "--movements", str(MOVEMENTS),
+                    "--demonstration-period", str(PERIOD), "--eval-every", "60", "--runs-dir",
+                    str(tmp_path), "--name", "cut", "--domain", str(ros_domain), "--quiet",
+                    "--param", "tolerance_noise=0.1"],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+
+
+def resume(ros_processes, ros_domain, run_dir) -> str:
+    """--resume the run to its end; its output (it must finish)."""
+    resumed = ros_processes.start("resume-cut", [RUN, "--resume", str(run_dir), "--quiet",
+                                                 "--domain", str(ros_domain)],
+                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    output, _ = resumed.communicate(timeout=400)
+    assert resumed.returncode == 0, output[-3000:]
+    return output
+
+
 def test_a_demonstration_given_but_not_taken_is_given_again_on_resume(
         ros_processes, ros_domain, tmp_path, rclpy_context):
     from sgim_msgs.msg import Demonstration, Movement
@@ -31,13 +52,7 @@ def test_a_demonstration_given_but_not_taken_is_given_again_on_resume(
     moves = client.capture(Movement, "/movements", qos.RECORDS)
     words = client.capture(Demonstration, "/demonstrations", qos.RECORDS)
     run_dir = tmp_path / "cut"
-    child = ros_processes.start(
-        "run-cut", [RUN, "sgim-d", "--seed", "1", "--movements", str(MOVEMENTS),
-                    "--demonstration-period", str(PERIOD), "--eval-every", "60", "--runs-dir",
-                    str(tmp_path), "--name", "cut", "--domain", str(ros_domain), "--quiet",
-                    # a strict teacher: it shows something each turn
-                    "--param", "tolerance_noise=0.1"],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    child = start_run(ros_processes, ros_domain, tmp_path)
     params = str(run_dir / "params.yaml")
     # Stop the explorer at the turn's boundary: its job never ends, so the arbiter never
     # reaches the turn, while the teacher, which follows the movements, gives its word.
@@ -58,11 +73,7 @@ def test_a_demonstration_given_but_not_taken_is_given_again_on_resume(
                           if d.movement_index == PERIOD], "the turn was taken: no test"
     client.close()
 
-    resumed = ros_processes.start("resume-cut", [RUN, "--resume", str(run_dir), "--quiet",
-                                                 "--domain", str(ros_domain)],
-                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    output, _ = resumed.communicate(timeout=400)
-    assert resumed.returncode == 0, output[-3000:]
+    output = resume(ros_processes, ros_domain, run_dir)
     assert (f"resume: the teacher's turn at movement {PERIOD}: demonstration "
             f"{given[0].index}") in output and "the turn is taken again" in output, output
     with warnings.catch_warnings():
@@ -93,12 +104,7 @@ def test_an_imitation_cut_by_a_kill_is_finished_on_resume(ros_processes, ros_dom
     client = GraphClient(rclpy_context, "imitation_cutter")
     moves = client.capture(Movement, "/movements", qos.RECORDS)
     run_dir = tmp_path / "cut"
-    child = ros_processes.start(
-        "run-cut", [RUN, "sgim-d", "--seed", "1", "--movements", str(MOVEMENTS),
-                    "--demonstration-period", str(PERIOD), "--eval-every", "60", "--runs-dir",
-                    str(tmp_path), "--name", "cut", "--domain", str(ros_domain), "--quiet",
-                    "--param", "tolerance_noise=0.1"],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    child = start_run(ros_processes, ros_domain, tmp_path)
     params = str(run_dir / "params.yaml")
     # Stop the imitation node at the turn's first imitation, then kill the run.
     assert client.spin_until(lambda: any(m.index == PERIOD + 1 for m in moves), timeout=180)
@@ -117,11 +123,7 @@ def test_an_imitation_cut_by_a_kill_is_finished_on_resume(ros_processes, ros_dom
             and m.index > PERIOD]
     assert 1 <= len(made) < 5, f"the imitation was not cut ({made}): no test"
 
-    resumed = ros_processes.start("resume-cut", [RUN, "--resume", str(run_dir), "--quiet",
-                                                 "--domain", str(ros_domain)],
-                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    output, _ = resumed.communicate(timeout=400)
-    assert resumed.returncode == 0, output[-3000:]
+    output = resume(ros_processes, ros_domain, run_dir)
     assert "resume: the imitation of demonstration" in output, output[-3000:]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
