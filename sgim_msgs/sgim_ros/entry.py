@@ -170,9 +170,9 @@ def end_now(code: int) -> None:
     """End a node of a run once it is torn down, without the interpreter's finalization.
 
     Why: the middleware's participant can spin forever in its destructor at exit (seen after
-    a launcher's SIGKILL: a node at 70 % of a core for minutes, its launcher watchdog already
-    stopped with the other daemon threads), and such a node holds the run folder's lock, so
-    the run cannot be resumed. Everything the node keeps is written by now (the recorder
+    a launcher's SIGKILL: a node busy for minutes, its launcher watchdog already stopped with
+    the other daemon threads), and such a node holds the run folder's lock, so the run
+    cannot be resumed. Everything the node keeps is written by now (the recorder
     closes its bag in destroy_node); only the standard streams are flushed here."""
     for stream in (sys.stdout, sys.stderr):
         with contextlib.suppress(Exception):
