@@ -1,5 +1,6 @@
-"""A throw-away repository for the experiments' tests: experiments/, docs/ and runs/ of its
-own, which `reproduce.sh` (experiments/cli.py) reads and writes instead of the project's."""
+"""A throw-away repository for the experiments' tests: experiments/ (its shipped run tables
+too), docs/ and runs/ of its own, which `reproduce.sh` (experiments/cli.py) reads and writes
+instead of the project's."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from sgim_nodes.experiments import cli, pinned
+from sgim_nodes.experiments import cli, pinned, shipped
 from sgim_nodes.experiments.pinned import pin_of
 from sgim_nodes.provenance.fingerprint import data_files
 
@@ -42,5 +43,6 @@ def scratch_repo(tmp_path, monkeypatch) -> ScratchRepo:
         monkeypatch.setattr(module, "REPO", tmp_path)
         monkeypatch.setattr(module, "EXPERIMENTS", tmp_path / "experiments")
     monkeypatch.setattr(cli, "FIGURES", tmp_path / "docs" / "figures")
+    monkeypatch.setattr(shipped, "SHIPPED", tmp_path / "experiments" / "shipped")
     monkeypatch.setenv("SGIM_EXPERIMENT_RUNS", str(tmp_path / "runs"))
     return ScratchRepo(tmp_path)

@@ -1,12 +1,13 @@
 """ros_ws/reproduce.sh on a tiny graph experiment: runs made through the sweep driver, the
-study report written into its two pages with their provenance, and a run another experiment
-made with the same learner taken rather than made again."""
+study report written into its two pages with their provenance, a run another experiment made
+with the same learner taken rather than made again, and the same pages made again, byte for
+byte, from the run tables it shipped once its runs are gone."""
 
 from __future__ import annotations
 
 import pytest
 
-from sgim_nodes.experiments import cli, pages, pinned
+from sgim_nodes.experiments import cli, pages, pinned, shipped
 from sgim_nodes.experiments.reports.study import own_runs  # noqa: F401  (imported: it loads)
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -90,3 +91,26 @@ def test_a_graph_experiment_is_made_reported_and_shares_its_runs(scratch_repo, m
     assert cli.main(["other", "--runs-only", "--runs-dir", str(tmp_path / "runs" / "o2")]) == 0
     err = capsys.readouterr().err
     assert "sgim-d-P20-seed1 (" in err and "1 already finished, 0 to do" in err, err
+
+    # The runs are gone (a fresh clone): the pages are made from the shipped run tables alone,
+    # byte for byte but for where their data came from
+    tables = sorted(p.name for p in shipped.SHIPPED.iterdir())
+    assert tables == [f"{learner}-seed{seed}.npz" for learner in ("random", "sgim-d-P20")
+                      for seed in (0, 1)], tables
+    assert cli.main(["tiny", "--report-only"]) == 0  # the figures are 'other''s until now
+    made = {name: (tmp_path / name).read_text() for name in ("docs/results.md", "README.md")}
+    figures = {p.name: p.read_bytes() for p in (tmp_path / "docs" / "figures").iterdir()}
+    (tmp_path / "runs").rename(tmp_path / "runs.gone")
+    assert cli.main(["tiny", "--report-only"]) == 0, capsys.readouterr().err[-3000:]
+    for name, before in made.items():
+        after = (tmp_path / name).read_text()
+        assert without_provenance(after) == without_provenance(before), name
+        assert "4 read from the run tables of experiments/shipped/" in after, name
+    assert {p.name: p.read_bytes() for p in (tmp_path / "docs" / "figures").iterdir()} \
+        == figures
+
+
+def without_provenance(text: str) -> dict[str, str]:
+    blocks = pages.blocks_of(text)
+    blocks.pop("provenance", None)
+    return blocks

@@ -39,8 +39,8 @@ from sgim_nodes.core.learner_registry import compared_names
 from sgim_nodes.provenance import fingerprint
 
 CACHE_NAME = "analysis_cache.npz"
-CACHE_VERSION = 4  # 2: validated records, every segment; 3: sources, SGIM-ACTS's choices;
-# 4: the goal mode of each SGIM-ACTS choice
+CACHE_VERSION = 5  # 2: validated records, every segment; 3: sources, SGIM-ACTS's choices;
+# 4: the goal mode of each SGIM-ACTS choice; 5: each evaluation's distances goal by goal
 OUTCOME_SIZE = 2
 PROCESS_IMITATION, PROCESS_DEMONSTRATION, PROCESS_EVALUATION = (
     PROCESS_CODES[label] for label in ("imitation", "demonstration", "evaluation"))
@@ -100,6 +100,10 @@ class RunData:
     leaf_upper: np.ndarray  # (R, 2)
     leaf_interest: np.ndarray  # (R,)
     demo_source: np.ndarray = field(default_factory=lambda: np.zeros(0, str))  # (D,)
+    # each evaluation goal by goal (a row of NaN when its goals are not the last one's), and
+    # the goals of the last evaluation, in its order
+    eval_distances: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (E, G)
+    eval_goals: np.ndarray = field(default_factory=lambda: np.zeros((0, OUTCOME_SIZE)))  # (G, 2)
     # SGIM-ACTS (issue 33; empty for the others and for bags without these records): its
     # requests (HelpRequest: count when asked, teacher, what it asked to be shown, goal) and
     # each episode's strategy (the Goals that name one, with the count when it was chosen).
@@ -207,8 +211,10 @@ def _read_run(run_dir: Path) -> tuple[dict[str, np.ndarray], list[str]]:
 def _columns(records: dict[str, list]) -> dict[str, np.ndarray]:
     moves = [m for m in records["movements"] if m.process != PROCESS_EVALUATION]
     evals: dict[int, float] = {}
+    latest: dict[int, object] = {}
     for e in records["evaluations"]:
         evals[e.movement_index] = e.mean_distance  # a repeated point: the latest wins
+        latest[e.movement_index] = e
     maps: dict[int, RegionMapRecord] = {}
     for m in records["region_map"]:
         maps[m.movement_index] = m  # the state after the last change at that count
@@ -230,6 +236,7 @@ def _columns(records: dict[str, list]) -> dict[str, np.ndarray]:
         "demo_outcome": np.array([_point(d.outcome) for d in records["demonstrations"]]
                                  ).reshape(-1, OUTCOME_SIZE),
         "demo_source": np.array([d.source for d in records["demonstrations"]], dtype=str),
+        **_goal_by_goal([latest[k] for k in sorted(latest)]),
         "map_index": np.array(map_keys, dtype=np.int64),
         "map_offsets": np.concatenate([[0], np.cumsum([len(g) for g in leaves])]
                                       ).astype(np.int64),
@@ -246,6 +253,21 @@ def _columns(records: dict[str, list]) -> dict[str, np.ndarray]:
         "budget": np.array(max((s.total_movements for s in status), default=-1)),
         "final_state": np.array(status[-1].state if status else -1),
     }
+
+
+def _goal_by_goal(evaluations: list) -> dict[str, np.ndarray]:
+    """Each evaluation's distances goal by goal (E, G), and the last evaluation's goals (G, 2):
+    what the pages' goal groups need, without reading the bag again."""
+    if not evaluations:
+        return {"eval_distances": np.zeros((0, 0)), "eval_goals": np.zeros((0, OUTCOME_SIZE))}
+    goals = np.asarray(evaluations[-1].goals, float).reshape(-1, OUTCOME_SIZE)
+    rows = np.full((len(evaluations), len(goals)), np.nan)
+    for row, e in zip(rows, evaluations, strict=True):
+        same = np.asarray(e.goals, float).reshape(-1, OUTCOME_SIZE)
+        if same.shape == goals.shape and np.array_equal(same, goals) \
+                and len(e.distances) == len(goals):
+            row[:] = np.asarray(e.distances, float)
+    return {"eval_distances": rows, "eval_goals": goals}
 
 
 def bag_fingerprint(run_dir: Path) -> str:

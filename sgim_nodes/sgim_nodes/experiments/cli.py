@@ -66,6 +66,9 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--report-only", action="store_true",
                    help="make no run: analyse the runs there and write the pages")
     p.add_argument("--runs-only", action="store_true", help="make the runs, write no page")
+    p.add_argument("--ship", action="store_true",
+                   help="make no run and no page: write a run table into experiments/shipped/ "
+                        "for each finished run of today's code (a full reproduce ships too)")
     p.add_argument("--keep-unlike", action="store_true",
                    help="keep runs made by another learner instead of making them again")
     p.add_argument("--list", action="store_true",
@@ -84,8 +87,8 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         p.error("--parallel must be >= 1")
     if args.runs_dir and len(args.names) != 1:
         p.error("--runs-dir needs exactly one experiment")
-    if args.report_only and args.runs_only:
-        p.error("--report-only and --runs-only exclude each other")
+    if sum((args.report_only, args.runs_only, args.ship)) > 1:
+        p.error("--report-only, --runs-only and --ship exclude each other")
     if not (args.names or args.all or args.list or args.check or args.mark_stale
             or args.references):
         p.error("name an experiment (or --all, --list, --check, --mark-stale, --references)")
@@ -229,9 +232,14 @@ def reproduce(exp: Experiment, args: argparse.Namespace, command: str) -> int:
         return 2
     runs_dir = args.runs_dir or exp.runs_dir
     began = time.monotonic()
+    if args.ship:
+        ship_runs(exp, runs_dir)
+        return 0
     if not args.report_only:
         say(f"{exp.name}: making its runs in {runs_dir} ({exp.maker})")
         code = make_runs(exp, runs_dir, args.parallel, args.address, args.keep_unlike)
+        if code or args.runs_only:
+            ship_runs(exp, runs_dir)  # what finished is kept, even when the rest failed
         if code:
             say(f"{exp.name}: some runs did not finish (exit {code}); run the same command to "
                 "resume")
@@ -249,7 +257,7 @@ def reproduce(exp: Experiment, args: argparse.Namespace, command: str) -> int:
             "(resumable), then --report-only makes its pages again")
         return 2
     wall = time.monotonic() - began
-    notes = [*report.notes, f"runs in `{_shown(runs_dir)}`"]
+    notes = [*report.notes, *([f"runs in `{_shown(runs_dir)}`"] if runs_dir.is_dir() else [])]
     outputs = [*exp.pages, _shown(FIGURES)]  # what this command writes is not a change
     made = Provenance.now(command, exp.name, current_fingerprint(exp, args.parallel),
                           environment(), wall, notes,
@@ -261,7 +269,22 @@ def reproduce(exp: Experiment, args: argparse.Namespace, command: str) -> int:
         say(f"{exp.name}: wrote {page}")
     for figure in report.figures:
         say(f"{exp.name}: drew {_shown(figure)}")
+    if not args.report_only:
+        ship_runs(exp, runs_dir)
     return 0
+
+
+def ship_runs(exp: Experiment, runs_dir: Path) -> None:
+    from sgim_nodes.experiments.shipped import SHIPPED, behaviours, ship_folder
+
+    if exp.maker == "graph" and not behaviours(exp):
+        say(f"{exp.name}: no run shipped: its reference runs are not today's code's "
+            "(`ros_ws/reproduce.sh --references` makes them)")
+        return
+    written = ship_folder(exp, runs_dir)
+    if written:
+        say(f"{exp.name}: shipped {len(written)} run table(s) in {_shown(SHIPPED)} "
+            f"({sum(p.stat().st_size for p in written) / 1e6:.1f} MB)")
 
 
 def current_fingerprint(exp: Experiment, parallel: int) -> str:

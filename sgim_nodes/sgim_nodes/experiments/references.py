@@ -284,6 +284,23 @@ def experiment_fingerprint(experiment: Any, table: Mapping[str, Any],
     it did nothing in) leaves the fingerprint as it was. ReferencesOutdated when the kept
     references are not today's code's (``todays``; without it, what the table's code did) or
     lack a configuration."""
+    runs = reference_digests(experiment, table, todays)
+    return fp._digest([fp.canonical(sorted(runs.items())).encode(),
+                       fp.canonical(dict(experiment.data)).encode()])
+
+
+def run_behaviours(experiment: Any, table: Mapping[str, Any], todays: bool = True
+                   ) -> dict[str, str]:
+    """Run name -> what that one run does: its configuration's reference digest and the data
+    files. A shipped run (experiments/shipped.py) stands for today's run while this holds."""
+    data = fp.canonical(dict(experiment.data)).encode()
+    return {name: fp._digest([digest.encode(), data])
+            for name, digest in reference_digests(experiment, table, todays).items()}
+
+
+def reference_digests(experiment: Any, table: Mapping[str, Any], todays: bool = True
+                      ) -> dict[str, str]:
+    """Run name -> the reference digest of its configuration (see experiment_fingerprint)."""
     configs = configurations(experiment)
     entry = table.get(experiment.maker) or {}
     if todays:
@@ -291,17 +308,14 @@ def experiment_fingerprint(experiment: Any, table: Mapping[str, Any],
     elif not entry.get("key"):
         raise ReferencesOutdated(f"no reference of the {experiment.maker} experiments is kept")
     if experiment.maker == "world":
-        runs = {name: str(entry.get("key")) for name in configs}
-    else:
-        digests = kept_digests(entry)
-        missing = sorted(set(configs.values()) - set(digests))
-        if missing:
-            raise ReferencesOutdated(
-                f"{experiment.name}: {len(missing)} configuration(s) have no reference run "
-                "yet: `ros_ws/reproduce.sh --references` makes them")
-        runs = {name: digests[config] for name, config in configs.items()}
-    return fp._digest([fp.canonical(sorted(runs.items())).encode(),
-                       fp.canonical(dict(experiment.data)).encode()])
+        return {name: str(entry.get("key")) for name in configs}
+    digests = kept_digests(entry)
+    missing = sorted(set(configs.values()) - set(digests))
+    if missing:
+        raise ReferencesOutdated(
+            f"{experiment.name}: {len(missing)} configuration(s) have no reference run "
+            "yet: `ros_ws/reproduce.sh --references` makes them")
+    return {name: digests[config] for name, config in configs.items()}
 
 
 def aliases_of(table: Mapping[str, Any], experiment: str) -> dict[str, str]:

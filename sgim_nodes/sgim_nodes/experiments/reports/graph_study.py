@@ -6,7 +6,7 @@ from __future__ import annotations
 from datetime import datetime
 from pathlib import Path
 
-from sgim_nodes.analysis.pooling import check_alike, run_fingerprint
+from sgim_nodes.analysis.pooling import check_alike
 from sgim_nodes.analysis.study import Study, group_runs, load_study
 from sgim_nodes.experiments.pinned import Experiment
 
@@ -16,28 +16,44 @@ class NotPinned(RuntimeError):
 
 
 def load(experiment: Experiment, runs_dir: Path) -> Study:
-    """The experiment's study: every run it names, finished and made by today's learner."""
+    """The experiment's study: every run it names, finished and made by today's learner, from
+    the runs folder, else from the run tables the repository ships (experiments/shipped.py)."""
+    from sgim_nodes.experiments.shipped import SHIPPED, shipped_runs, todays_runs
+
     expected = experiment.run_fingerprints()
-    study = load_study(runs_dir, warn=lambda message: None)
-    found = {run.name: run for run in study.runs}
-    missing = sorted(set(expected) - set(found))
+    made = load_study(runs_dir, warn=lambda message: None).runs if runs_dir.is_dir() else []
+    found = {run.name: run for run in todays_runs(experiment, made)}
+    if len(found) < len(expected):
+        for name, run in shipped_runs(experiment).items():
+            found.setdefault(name, run)
+    missing = [name for name in expected if name not in found]
     if missing:
-        raise NotPinned(f"{runs_dir}: {len(missing)} run(s) of {experiment.name} are not made "
-                        f"yet ({', '.join(missing[:5])}{', ...' if len(missing) > 5 else ''}): "
-                        "run the experiment first")
-    unlike = []
-    for name, value in expected.items():
-        made = run_fingerprint(found[name])
-        if made is None or made.value != value or not found[name].finished:
-            unlike.append(name)
-    if unlike:
-        raise NotPinned(f"{runs_dir}: {', '.join(unlike[:5])}{', ...' if len(unlike) > 5 else ''}"
-                        f" are not what {experiment.path.name} makes with today's learner "
-                        "(unfinished, or another fingerprint): run the experiment again")
-    study.runs = [found[name] for name in expected]  # the pinned runs only, in the file's order
+        unlike = sorted({run.name for run in made} & set(missing))
+        absent = [name for name in missing if name not in unlike]
+        said = []
+        if absent:
+            said.append(f"{len(absent)} run(s) of {experiment.name} are not made yet "
+                        f"({_some(absent)})")
+        if unlike:
+            said.append(f"{_some(unlike)} are not what {experiment.path.name} makes with "
+                        "today's learner (unfinished, or another fingerprint)")
+        raise NotPinned(f"{runs_dir} and {SHIPPED.relative_to(SHIPPED.parents[1])}/: "
+                        + "; ".join(said) + ": run the experiment")
+    study = Study(runs_dir, [found[name] for name in expected], {}, [])  # the file's order
     study.repeated_seeds = group_runs(study.runs, warn=lambda message: None)
     check_alike(study)
     return study
+
+
+def _some(names: list[str]) -> str:
+    return ", ".join(names[:5]) + (", ..." if len(names) > 5 else "")
+
+
+def shipped_count(study: Study) -> int:
+    """How many of the study's runs were read from shipped run tables."""
+    from sgim_nodes.experiments.shipped import SUFFIX
+
+    return sum(run.path.suffix == SUFFIX for run in study.runs)
 
 
 def wall_span(study: Study) -> float | None:
@@ -56,6 +72,9 @@ def run_time_note(study: Study) -> str:
     span they were made in (the report itself may be made again in seconds)."""
     durations = [r.duration_s for r in study.runs if r.duration_s]
     span = wall_span(study)
+    shipped = shipped_count(study)
     return (f"{len(study.runs)} runs through the graph, {sum(durations) / 3600:.1f} h of run "
             "time in all" + (f", {span / 3600:.1f} h from first start to last end" if span
-                             else ""))
+                             else "")
+            + (f"; {shipped} read from the run tables of experiments/shipped/" if shipped
+               else ""))

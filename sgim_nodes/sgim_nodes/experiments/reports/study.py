@@ -5,7 +5,6 @@ findings checked against the runs, and what the study cost."""
 from __future__ import annotations
 
 import math
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +21,7 @@ from sgim_nodes.analysis.report import (
     table,
 )
 from sgim_nodes.analysis.statistics import ALPHA, PairTest, demonstration_times
-from sgim_nodes.analysis.study import Study
+from sgim_nodes.analysis.study import RunData, Study
 from sgim_nodes.core.learner_registry import DEMO_ONLY, RANDOM, SAGGRIAC, SGIM_D, display_name
 from sgim_nodes.experiments.pinned import Experiment
 from sgim_nodes.experiments.reports import Report
@@ -63,19 +62,13 @@ def draw(study: Study, numbers: StudyNumbers, folder: Path) -> list[Path]:
     return [*drawn, *([tree] if tree is not None else [])]
 
 
-def _final_distances(run_dir: Path, goals: np.ndarray) -> np.ndarray | None:
+def _final_distances(run: RunData, goals: np.ndarray) -> np.ndarray | None:
     """The run's last evaluation, goal by goal, in the benchmark's order."""
-    from sgim_nodes.bag.run_folder import load_run_folder
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        evaluations = load_run_folder(run_dir, topics=["evaluations"]).evaluations
-    if not evaluations:
+    if not len(run.eval_distances):
         return None
-    last = evaluations[-1]
-    if last.goals.shape != goals.shape or not np.allclose(last.goals, goals, atol=1e-9):
-        raise ValueError(f"{run_dir}: its evaluation goals are not the shipped benchmark set")
-    return np.asarray(last.distances, float)
+    if run.eval_goals.shape != goals.shape or not np.allclose(run.eval_goals, goals, atol=1e-9):
+        raise ValueError(f"{run.name}: its evaluation goals are not the shipped benchmark set")
+    return np.asarray(run.eval_distances[-1], float)
 
 
 def goal_groups(study: Study) -> tuple[dict[str, dict[str, list[float]]], str]:
@@ -94,7 +87,7 @@ def goal_groups(study: Study) -> tuple[dict[str, dict[str, list[float]]], str]:
     groups: dict[str, dict[str, list[float]]] = {name: {} for name in subsets}
     for learner in study.learners:
         for run in study.runs_of(learner):
-            d = _final_distances(run.path, goals)
+            d = _final_distances(run, goals)
             if d is not None:
                 for name, mask in subsets.items():
                     groups[name].setdefault(learner, []).append(float(d[mask].mean()))

@@ -1,0 +1,97 @@
+"""The runs the repository ships: one run table per graph run (analysis/run_table.py), kept in
+experiments/shipped/ and valid while today's code makes the same run.
+
+Why: the pages' runs take hours of compute and live in a runs folder no clone has. A run
+table is the part of a run the pages read (a few hundred kilobytes, no bag), so a fresh clone
+makes every page from the shipped tables in seconds, and runs made in one place (or one
+session) are never made again while the code behaves the same.
+
+When is a shipped run today's run? Each table is stamped with its run's behaviour
+(references.run_behaviours): the reference digest of its configuration and the data files.
+While the reference runs of today's code give the same digest, the run it stands for would
+move the same, so a refactor that changes no movement keeps every table; one that changes a
+configuration's movements drops that configuration's tables until its runs are made again.
+A run shared by two experiments (same name, same configuration) is one table.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping
+from pathlib import Path
+
+from sgim_nodes.analysis.pooling import run_fingerprint
+from sgim_nodes.analysis.run_table import RunTableError, load_run, read_stamp, save_run
+from sgim_nodes.analysis.study import RunData
+from sgim_nodes.experiments.pinned import REPO, Experiment
+from sgim_nodes.experiments.references import ReferencesOutdated, read_table, run_behaviours
+
+SHIPPED = REPO / "experiments" / "shipped"
+SUFFIX = ".npz"
+
+
+def table_path(name: str, folder: Path | None = None) -> Path:
+    """Where the run called `name` is shipped."""
+    return (folder or SHIPPED) / f"{name}{SUFFIX}"
+
+
+def behaviours(experiment: Experiment) -> dict[str, str]:
+    """Run name -> today's behaviour of that run; empty when the kept references are not
+    today's code's (then no shipped run can be trusted, nor shipped)."""
+    try:
+        return run_behaviours(experiment, read_table(experiment.references_path))
+    except ReferencesOutdated:
+        return {}
+
+
+def shipped_runs(experiment: Experiment, folder: Path | None = None,
+                 warn: Callable[[str], None] = lambda message: None) -> dict[str, RunData]:
+    """The experiment's runs the repository ships with today's behaviour, by name."""
+    found: dict[str, RunData] = {}
+    for name, behaviour in behaviours(experiment).items():
+        path = table_path(name, folder)
+        if not path.is_file():
+            continue
+        try:
+            if read_stamp(path).get("behaviour") != behaviour:
+                warn(f"{path.name}: made by code that moved otherwise: not used")
+                continue
+            found[name] = load_run(path)
+        except (OSError, ValueError, KeyError, RunTableError) as error:
+            warn(f"{path.name}: unreadable ({error}): not used")
+    return found
+
+
+def todays_runs(experiment: Experiment, runs: Iterable[RunData]) -> list[RunData]:
+    """The runs made by today's code for the experiment: finished, named by it, and of the
+    learner fingerprint it gives that name."""
+    expected = experiment.run_fingerprints()
+    kept = []
+    for run in runs:
+        made = run_fingerprint(run)
+        if run.finished and made is not None and expected.get(run.name) == made.value:
+            kept.append(run)
+    return kept
+
+
+def ship(experiment: Experiment, runs: Iterable[RunData], folder: Path | None = None
+         ) -> list[Path]:
+    """Write a table for each of `runs` made by today's code (todays_runs), stamped with its
+    behaviour; the paths written. Nothing is shipped when the references are outdated."""
+    today: Mapping[str, str] = behaviours(experiment)
+    if not today:
+        return []
+    return [save_run(run, table_path(run.name, folder), {"behaviour": today[run.name]})
+            for run in todays_runs(experiment, runs)]
+
+
+def ship_folder(experiment: Experiment, runs_dir: Path, folder: Path | None = None
+                ) -> list[Path]:
+    """Ship every finished run of the experiment that `runs_dir` holds made by today's code."""
+    from sgim_nodes.analysis.study import load_study
+
+    if experiment.maker != "graph" or not runs_dir.is_dir():
+        return []
+    names = set(experiment.run_fingerprints())
+    made = [run for run in load_study(runs_dir, warn=lambda message: None).runs
+            if run.name in names]
+    return ship(experiment, made, folder)
