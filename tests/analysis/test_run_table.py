@@ -13,7 +13,6 @@ from synthetic_study import ACTS_EPISODES, acts_records, run_messages, write_run
 from sgim_nodes.analysis import run_table
 from sgim_nodes.analysis.study import load_run_data, load_study
 
-
 MAPS = ("map_index", "map_offsets", "leaf_lower", "leaf_upper", "leaf_interest")
 
 

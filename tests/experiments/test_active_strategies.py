@@ -8,9 +8,11 @@ import shutil
 import textwrap
 from pathlib import Path
 
+import numpy as np
 import pytest
+import yaml
 
-from sgim_nodes.experiments import cli, pages, pinned
+from sgim_nodes.experiments import acts_values, cli, pages, pinned, shipped
 from sgim_nodes.experiments.pinned import REPO
 from sgim_nodes.experiments.reports import REPORTS, acts_choices
 from sgim_nodes.sweep.sweep_file import spec_fingerprint
@@ -25,12 +27,17 @@ from tests.analysis.synthetic_study import (
 GRID = """\
   grid:
     - learner: sgim-acts
+    - learner: sgim-acts
+      param:
+        strategy_choice_order: region-first
+        strategy_value: gain
     - learner: sgim-d
       param:
         teacher_turns: centre,west,rough
     - learner: [sgim-d, saggriac, demo-only]
 """
 TURNS = "sgim-d [teacher_turns=centre,west,rough]"
+BOTH = "sgim-acts [strategy_choice_order=region-first, strategy_value=gain]"
 
 
 def test_the_pinned_experiment_makes_80_runs_and_shares_the_study_s_30():
@@ -60,7 +67,7 @@ def test_the_pinned_experiment_makes_80_runs_and_shares_the_study_s_30():
                                                                "demo-only"}
 
 
-FINALS = {"sgim-acts": [0.10, 0.12, 0.11], TURNS: [0.15, 0.16, 0.18],
+FINALS = {"sgim-acts": [0.10, 0.12, 0.11], BOTH: [0.14, 0.13, 0.15], TURNS: [0.15, 0.16, 0.18],
           "sgim-d": [0.20, 0.25, 0.30], "saggriac": [0.40, 0.45, 0.50],
           "demo-only": [0.30, 0.30, 0.32]}
 DEMONSTRATIONS = {TURNS: [0, 5, 10, 15], "sgim-d": [5, 10, 15], "demo-only": [5, 10, 15, 19]}
@@ -92,8 +99,13 @@ def repo(scratch_repo, monkeypatch) -> Path:
     monkeypatch.setattr(acts_choices, "WINDOW", 10)
     monkeypatch.setattr(acts_choices, "LAST", 10)
     runs = tmp_path / "runs" / "tiny"
-    for spec in pinned.find("tiny").graph_runs:
-        group = spec.learner + (" [teacher_turns=centre,west,rough]" if spec.params else "")
+    tiny = pinned.find("tiny")
+    cli.references([tiny], 1)
+    behaviours = shipped.behaviours(tiny)
+    for spec in tiny.graph_runs:
+        params = {k: yaml.safe_load(v) for k, v in spec.params}
+        group = spec.learner + (" [" + ", ".join(f"{k}={v}" for k, v in params.items()) + "]"
+                                if params else "")
         extra = (acts_records(ACTS_EPISODES) if spec.learner == "sgim-acts"
                  else demonstrations_at(DEMONSTRATIONS.get(group, [])))
         inside = {3: 0} if (group, spec.seed) == ("sgim-acts", 0) else {}
@@ -101,8 +113,25 @@ def repo(scratch_repo, monkeypatch) -> Path:
         write_run(runs, spec.learner, spec.seed,
                   run_messages(spec.learner, spec.seed, evals, inside, extra=extra),
                   fingerprint=spec_fingerprint(spec).to_dict(), name=spec.name,
-                  parameters={"teacher_turns": "centre,west,rough"} if spec.params else None)
+                  parameters=params or None)
+        if group == BOTH:  # the values of its choices, as a replay keeps them
+            acts_values.save(acts_values.values_path(shipped.SHIPPED, spec.name),
+                             choice_values(spec.seed), behaviours[spec.name])
     return tmp_path
+
+
+def choice_values(seed: int) -> dict[str, np.ndarray]:
+    """ACTS_EPISODES' choices with values: the learner's own below the asking pair's in all
+    answered requests but seed 0's second (5 of 6 pooled)."""
+    strategies = [strategy for _, strategy, _, _ in ACTS_EPISODES]
+    own = np.full(len(strategies), 0.1)
+    if seed == 0:
+        own[5] = 0.9  # the answered emulation:west request
+    return {"count": np.array([c for c, _, _, _ in ACTS_EPISODES]),
+            "strategy": np.array(strategies), "answered": np.array(
+                [answered for _, _, _, answered in ACTS_EPISODES]),
+            "value": np.full(len(strategies), 0.5), "own": own,
+            "outcome": np.zeros((20, 2))}
 
 
 def test_the_report_writes_every_block_of_the_page(repo, capsys):
@@ -118,7 +147,7 @@ def test_the_report_writes_every_block_of_the_page(repo, capsys):
         "SGIM-D, centre, west, rough taking turns") < comparison.index("SAGG-RIAC")
     assert "| **SGIM-ACTS** | 0.110 [" in comparison and "| 2 | 1/3 | 1, 0, 0 | 3 |" in comparison
     assert sum(line.startswith("| sgim-acts | ") for line in
-               blocks["error-tests"].splitlines()) == 4  # against each other learner
+               blocks["error-tests"].splitlines()) == 5  # against each other learner
     # 2 demonstrations taken per run of 7 requests; SGIM-D's arms 4 and 3 per run
     demos = blocks["demonstrations"]
     assert "| SGIM-ACTS | 2, 2, 2 | 2.0 [2.0, 2.0] | centre 1.0, west 1.0, rough 0.0 | 7, 7, 7 |" \
@@ -143,6 +172,21 @@ def test_the_report_writes_every_block_of_the_page(repo, capsys):
     assert "| land | none (no precise expert) | 0 | 3 | 0 | 3 |  |" in blocks["regions"]
     assert "| 0-10 | 50.0 % | 25.0 % | 0.0 % | 0.0 % | 0.0 % | 25.0 % | 1.0 | 0.0 | 1.0 |" \
         in blocks["strategies"]
-    for figure in ("active_strategies_error_curves.png", "active_strategies_choices.png"):
+    # the next choice: its arm beside today's, and the predictions judged as pinned
+    arms = blocks["arms"]
+    assert "| today's choice | 0.110 [" in arms and "| **(A)+(B)** | 0.140 [" in arms
+    assert "| 7.0 | 2.0 | 75.0 % (9 of 12); 3 of 3 runs | 20.0 % (3 of 15); 0 of 3 runs |" \
+        in arms
+    said = {line.split(" | ")[0][2:4]: line for line in blocks["predictions"].splitlines()
+            if line.startswith("| P")}
+    assert "both in 0 of 3 runs" in said["P1"] and said["P1"].endswith("| **failed** |")
+    assert "pooled 83.3 % (5 of 6 answered requests); per run 50.0 % to 100.0 %" in said["P2"]
+    assert said["P2"].endswith("| **held** |") and said["P3"].endswith("| **held** |")
+    assert "2.0 per run against 4.0" in said["P4"] and said["P4"].endswith("| **held** |")
+    both = [v for k, v in rows.items() if k.startswith("| (a)+(b)")]
+    assert [row.rsplit(" | ", 1)[1] for row in both] == ["**met** |", "**not met** |",
+                                                         "**met** |", "**met** |"]
+    for figure in ("active_strategies_error_curves.png", "active_strategies_choices.png",
+                   "active_strategies_arms.png"):
         assert (repo / "docs" / "figures" / figure).stat().st_size > 10_000
     assert cli.main(["--check"]) == 0

@@ -287,3 +287,27 @@ def plot_strategy_shares(shares: dict[int, dict[str, float]],
     fig.savefig(path, dpi=DPI)
     plt.close(fig)
     return path
+
+
+def plot_share_curves(curves: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]],
+                      goals: dict[str, float], window: int, path: Path) -> Path:
+    """One panel per share (``goals``: its title and goal line), one line per arm: ``curves``
+    maps an arm to (window middles, first share, second share), shares in [0, 1]."""
+    fig, axes = plt.subplots(1, len(goals), figsize=(5.2 * len(goals) + 1.6, 3.8),
+                             sharey=True, squeeze=False)
+    for k, (ax, (title, goal)) in enumerate(zip(axes[0], goals.items(), strict=True)):
+        for j, (arm, series) in enumerate(curves.items()):
+            ax.plot(series[0], 100 * series[1 + k], marker="o", markersize=3,
+                    color=plt.get_cmap("tab10")(j), label=arm)
+        ax.axhline(100 * goal, color="black", linestyle="--", linewidth=1,
+                   label=f"goal ({100 * goal:.0f} %)")
+        ax.set_title(f"{title}, per window of {window} movements", fontsize=10)
+        ax.set_xlabel("movements")
+        ax.set_ylim(0, 100)
+        ax.grid(alpha=0.3)
+    axes[0][0].set_ylabel("share of the requests (%)")
+    axes[0][-1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+    return path

@@ -75,6 +75,12 @@ def save_run(run: RunData, path: Path, stamp: Mapping[str, Any]) -> Path:
                   learner=np.array(run.learner), seed=np.array(run.seed),
                   metadata=_text(run.metadata), stamp=_text(dict(stamp)),
                   notes=np.array(run.warnings, dtype=str))
+    return write_arrays(path, arrays)
+
+
+def write_arrays(path: Path, arrays: Mapping[str, np.ndarray]) -> Path:
+    """An ``.npz`` of `arrays`, written atomically and byte for byte the same for the same
+    arrays (sorted names, fixed zip dates): shipping the same data again changes no file."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
@@ -82,7 +88,7 @@ def save_run(run: RunData, path: Path, stamp: Mapping[str, Any]) -> Path:
         with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED) as archive:
             for name in sorted(arrays):
                 buffer = io.BytesIO()
-                np.lib.format.write_array(buffer, arrays[name], allow_pickle=False)
+                np.lib.format.write_array(buffer, np.asarray(arrays[name]), allow_pickle=False)
                 info = zipfile.ZipInfo(f"{name}.npy", date_time=_ZIP_DATE)
                 info.compress_type = zipfile.ZIP_DEFLATED
                 archive.writestr(info, buffer.getvalue(), compresslevel=9)

@@ -33,8 +33,9 @@ from sgim_nodes.analysis.statistics import (
 from sgim_nodes.analysis.study import Study
 from sgim_nodes.core.experts import FISHING_EXPERTS
 from sgim_nodes.core.learner_registry import SGIM_ACTS, SGIM_D, display_name
+from sgim_nodes.experiments import shipped
 from sgim_nodes.experiments.pinned import Experiment
-from sgim_nodes.experiments.reports import Report, acts_choices
+from sgim_nodes.experiments.reports import Report, acts_arms, acts_choices
 from sgim_nodes.experiments.reports.acts_choices import Verdict
 from sgim_nodes.experiments.reports.graph_study import load, run_time_note
 from sgim_nodes.experiments.reports.study import own_runs
@@ -140,8 +141,24 @@ def make(experiment: Experiment, runs_dir: Path, figures_dir: Path) -> Report:
     report.add(page, "regions", acts_choices.regions_table(runs, last))
     report.add(page, "choices", acts_choices.shares_table(shares, last))
     report.add(page, "choice-modes", acts_choices.modes_table(runs, last))
+    acts = acts_arms.arms_of(study, specs, last)
+    turns = acts_arms.same_teachers(specs)
+    judged: list[Verdict] = []
+    if len(acts) > 1 and turns is not None:
+        arm_tests = acts_arms.error_tests(numbers, acts, turns)
+        report.figures.append(acts_arms.draw(acts, figures_dir, window))
+        report.add(page, "arms-figure", f"![Each SGIM-ACTS arm's expert share and rough's "
+                                        f"share per window of {window} movements]"
+                                        f"(figures/{acts_arms.FIGURE})")
+        report.add(page, "arms", acts_arms.arms_table(acts, numbers, arm_tests, demos, last))
+        both = [a for a in acts if a.name == acts_arms.BOTH]
+        values = {} if not both else acts_arms.choice_values(
+            both[0], experiment.graph_runs, shipped.behaviours(experiment), shipped.SHIPPED)
+        judged = acts_arms.predictions(acts, arm_tests, demos, turns, values)
+        report.add(page, "predictions", acts_arms.predictions_table(judged))
     report.add(page, "goals", goals_table([*against.values(),
-                                           *acts_choices.verdicts(shares, last)]))
+                                           *acts_choices.verdicts(shares, last),
+                                           *acts_arms.goal_verdicts(acts, judged, last)]))
     durations = [r.duration_s for r in study.runs if r.duration_s]
     report.notes.append(f"{run_time_note(study)} (mean {np.mean(durations):.0f} s per run)"
                         if durations else run_time_note(study))
