@@ -1,9 +1,10 @@
-"""Issue 33: a person teaches SGIM-ACTS from the web page, as one of its teachers.
+"""A person teaches SGIM-ACTS from the web page, as one of its teachers.
 
-A short sgim-acts run whose only teacher is the web page (`--teacher web --param
-teachers=web`): the learner asks the page, and this test answers every request through the
-page's own API, as the page's buttons do, in turn with a teaching entry and with "none
-there". The page's log says each episode's strategy and each request; the bag holds the
+Two short sgim-acts runs: one whose only teacher is the web page (`--teacher web --param
+teachers=web`), one with the page beside the three experts and the next choice (region first,
+pairs valued by their gain; docs/active_strategies.md). The learner asks the page, and this
+test answers every request to it through the page's own API, as the page's buttons do, in
+turn with a teaching entry and with "none there". The page's log says each episode's strategy and each request; the bag holds the
 requests, the answers (source "expert:web", each naming its request) and the competences of
 the episodes, "none there" ones at -1 without a movement.
 """
@@ -36,13 +37,20 @@ def api(url: str, path: str, body: dict | None = None) -> dict:
         return json.loads(reply.read())
 
 
-def test_a_person_answers_sgim_acts_from_the_page(ros_processes, ros_domain, tmp_path):
+NEXT_CHOICE = ["--param", "strategy_choice_order=region-first", "--param",
+               "strategy_value=gain"]
+
+
+@pytest.mark.parametrize("settings", [["--param", "teachers=web"], NEXT_CHOICE],
+                         ids=["the-only-teacher", "beside-the-experts-next-choice"])
+def test_a_person_answers_sgim_acts_from_the_page(ros_processes, ros_domain, tmp_path,
+                                                  settings):
     from sgim_msgs.msg import RunStatus
     from sgim_nodes.bag.reader import load_run
 
     child = ros_processes.start("acts-web", [
         RUN, "sgim-acts", "--seed", "2", "--movements", str(MOVEMENTS), "--eval-every", "60",
-        "--teacher", "web", "--param", "teachers=web", "--web-port", "0", "--web-linger", "0",
+        "--teacher", "web", *settings, "--web-port", "0", "--web-linger", "0",
         "--runs-dir", str(tmp_path), "--name", "web", "--domain", str(ros_domain), "--quiet",
         "--timeout", "600"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     address = tmp_path / "web" / "web_teacher.url"
@@ -78,8 +86,12 @@ def test_a_person_answers_sgim_acts_from_the_page(ros_processes, ros_domain, tmp
 
     run = load_run(tmp_path / "web" / "bag")
     assert run.run_status[-1].state == RunStatus.STATE_FINISHED
-    asks = run.help_requests
-    assert len(asks) >= 2 and {a.teacher for a in asks} == {"web"}
+    asks = [a for a in run.help_requests if a.teacher == "web"]
+    assert len(asks) >= 2
+    if settings == NEXT_CHOICE:  # the experts were asked too
+        assert {a.teacher for a in run.help_requests} > {"web"}
+    else:
+        assert {a.teacher for a in run.help_requests} == {"web"}
     assert [a.index for a in asks] == answered
     replies = {d.help_request: d for d in run.demonstrations if d.source == "expert:web"}
     assert sorted(replies) == answered
@@ -91,7 +103,7 @@ def test_a_person_answers_sgim_acts_from_the_page(ros_processes, ros_domain, tmp
         if shown:  # an entry of the teaching set, its action only for mimicry
             assert reply.teaching_set_index == k % 29
             assert (len(reply.action) > 0) == (ask.content == "means-and-goal")
-    social = [c for c in run.competences if c.strategy != "autonomous"]
+    social = [c for c in run.competences if c.strategy.endswith(":web")]
     assert len(social) >= len(answered) - 1  # the budget may cut the last episode
     nothing = [c for c in social if c.movements_used == 0]
     assert nothing and all(c.competence == -1.0 and not len(c.reached) for c in nothing)
