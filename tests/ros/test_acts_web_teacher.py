@@ -4,9 +4,9 @@ Two short sgim-acts runs: one whose only teacher is the web page (`--teacher web
 teachers=web`), one with the page beside the three experts and the next choice (region first,
 pairs valued by their gain; docs/active_strategies.md). The learner asks the page, and this
 test answers every request to it through the page's own API, as the page's buttons do, in
-turn with a teaching entry and with "none there". The page's log says each episode's strategy and each request; the bag holds the
-requests, the answers (source "expert:web", each naming its request) and the competences of
-the episodes, "none there" ones at -1 without a movement.
+turn with a teaching entry and with "none there". The page's log says each episode's strategy
+and each request; the bag holds the requests, the answers (source "expert:web", each naming
+its request) and the competences of the episodes, "none there" ones at -1 without a movement.
 """
 
 from __future__ import annotations

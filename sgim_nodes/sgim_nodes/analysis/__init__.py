@@ -11,4 +11,15 @@ code, and it shows exactly what the node graph did.
   figures.py     error curves, landing histograms, interest-coloured region trees (PNG)
   report.py      the tables as named Markdown blocks: results.md's and the pages'
   cli.py         `analyze STUDY_DIR`: everything above into PNGs, results.md and results.json
+  run_table.py   one run's columns as one compressed file: what the repository ships
+  frames.py      runs as a tidy pandas table (``load_runs`` below)
 """
+
+
+def load_runs(path, names=None):
+    """The runs at `path` (run folders, shipped run tables, or a folder of either) as a tidy
+    pandas table, one row per evaluation and benchmark goal (frames.py says the columns);
+    only the runs called `names` when given."""
+    from sgim_nodes.analysis.frames import load_runs as load
+
+    return load(path, names)
