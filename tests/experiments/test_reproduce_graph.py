@@ -5,8 +5,10 @@ byte, from the run tables it shipped once its runs are gone."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
+from sgim_nodes.analysis import run_table
 from sgim_nodes.experiments import cli, pages, pinned, shipped
 from sgim_nodes.experiments.reports.study import own_runs  # noqa: F401  (imported: it loads)
 
@@ -108,6 +110,25 @@ def test_a_graph_experiment_is_made_reported_and_shares_its_runs(scratch_repo, m
         assert "4 read from the run tables of experiments/shipped/" in after, name
     assert {p.name: p.read_bytes() for p in (tmp_path / "docs" / "figures").iterdir()} \
         == figures
+
+    # --verify makes shipped runs again, by the runner and through the graph: the same runs;
+    # a table changed by one bit in one landing is found, its movement named
+    assert cli.main(["tiny", "--verify", "4", "--verify-seed", "5"]) == 0
+    err = capsys.readouterr().err
+    assert "verifying 4 of its 4 shipped runs (seed 5, by the runner)" in err, err
+    assert "4 of 4 runs made again the same" in err, err
+    assert cli.main(["tiny", "--verify", "1", "--graph"]) == 0
+    err = capsys.readouterr().err
+    assert "through the graph" in err and "1 of 1 runs made again the same" in err, err
+    path = shipped.SHIPPED / "sgim-d-P20-seed1.npz"
+    changed = run_table.load_run(path)
+    k = 11 + int(np.flatnonzero(np.isfinite(changed.outcome[11:, 1]))[0])
+    changed.outcome[k, 1] = np.nextafter(changed.outcome[k, 1], 2.0)
+    run_table.save_run(changed, path, run_table.read_stamp(path))
+    assert cli.main(["tiny", "--verify", "4"]) == 1
+    err = capsys.readouterr().err
+    assert f"sgim-d-P20-seed1: outcome differs first at movement {k + 1}" in err, err
+    assert "3 of 4 runs made again the same; differ: sgim-d-P20-seed1" in err, err
 
 
 def without_provenance(text: str) -> dict[str, str]:

@@ -69,6 +69,14 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--ship", action="store_true",
                    help="make no run and no page: write a run table into experiments/shipped/ "
                         "for each finished run of today's code (a full reproduce ships too)")
+    p.add_argument("--verify", type=int, metavar="K",
+                   help="make K shipped runs again, drawn at random, and check each against "
+                        "its run table movement for movement (by the runner; --graph: "
+                        "through the graph)")
+    p.add_argument("--verify-seed", type=int, metavar="S",
+                   help="the seed that draws the runs --verify checks (default: one it prints)")
+    p.add_argument("--graph", action="store_true",
+                   help="--verify makes the runs through the node graph")
     p.add_argument("--keep-unlike", action="store_true",
                    help="keep runs made by another learner instead of making them again")
     p.add_argument("--list", action="store_true",
@@ -87,8 +95,12 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         p.error("--parallel must be >= 1")
     if args.runs_dir and len(args.names) != 1:
         p.error("--runs-dir needs exactly one experiment")
-    if sum((args.report_only, args.runs_only, args.ship)) > 1:
-        p.error("--report-only, --runs-only and --ship exclude each other")
+    if sum((args.report_only, args.runs_only, args.ship, args.verify is not None)) > 1:
+        p.error("--report-only, --runs-only, --ship and --verify exclude each other")
+    if args.verify is not None and args.verify < 1:
+        p.error("--verify must be >= 1")
+    if (args.graph or args.verify_seed is not None) and args.verify is None:
+        p.error("--graph and --verify-seed go with --verify")
     if not (args.names or args.all or args.list or args.check or args.mark_stale
             or args.references):
         p.error("name an experiment (or --all, --list, --check, --mark-stale, --references)")
@@ -235,6 +247,8 @@ def reproduce(exp: Experiment, args: argparse.Namespace, command: str) -> int:
     if args.ship:
         ship_runs(exp, runs_dir)
         return 0
+    if args.verify is not None:
+        return verify_runs(exp, args)
     if not args.report_only:
         say(f"{exp.name}: making its runs in {runs_dir} ({exp.maker})")
         code = make_runs(exp, runs_dir, args.parallel, args.address, args.keep_unlike)
@@ -272,6 +286,28 @@ def reproduce(exp: Experiment, args: argparse.Namespace, command: str) -> int:
     if not args.report_only:
         ship_runs(exp, runs_dir)
     return 0
+
+
+def verify_runs(exp: Experiment, args: argparse.Namespace) -> int:
+    """0 when every run drawn is made again the same, 1 when one is not, 2 when the
+    experiment ships no run of today's code."""
+    import secrets
+
+    from sgim_nodes.experiments.verify import verify
+
+    if exp.maker != "graph":
+        say(f"{exp.name}: only graph experiments ship their runs today; nothing to verify")
+        return 2
+    seed = args.verify_seed if args.verify_seed is not None else secrets.randbelow(10**6)
+    found = verify(exp, args.verify, seed, args.graph, say)
+    if not found:
+        say(f"{exp.name}: no shipped run of today's code to verify: `ros_ws/reproduce.sh "
+            f"{exp.name}` makes and ships them")
+        return 2
+    wrong = [v.name for v in found if not v.same]
+    say(f"{exp.name}: {len(found) - len(wrong)} of {len(found)} runs made again the same"
+        + (f"; differ: {', '.join(wrong)}" if wrong else ""))
+    return 1 if wrong else 0
 
 
 def ship_runs(exp: Experiment, runs_dir: Path) -> None:
