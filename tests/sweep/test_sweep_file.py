@@ -184,14 +184,18 @@ def test_load_names_the_file(tmp_path):
 
 def test_the_pinned_study_is_run_studys_study():
     """The pinned study (experiments/study.yaml) makes run_study.sh's runs, under its folder
-    names, so either resumes what the other began."""
+    names, so either resumes what the other began: its defaults, and the second finding's
+    seeds 10-19 of SGIM-D and demonstrations only."""
     from sgim_nodes.experiments.pinned import find
 
-    args = batch.parse_args([])
+    expected = set()
+    for argv in ([], ["--learners", "sgim-d", "demo-only", "--first-seed", "10", "--seeds",
+                      "20"]):
+        args = batch.parse_args(argv)
+        expected |= {f"{learner}-seed{seed}" for seed in range(args.first_seed, args.seeds)
+                     for learner in args.learners}
     runs = find("study").graph_runs
-    expected = {f"{learner}-seed{seed}" for seed in range(args.first_seed, args.seeds)
-                for learner in args.learners}
-    assert {r.name for r in runs} == expected
+    assert len(expected) == 70 and {r.name for r in runs} == expected
     for run in runs:
         assert run.movements == args.movements and run.eval_every == args.eval_every
         assert run.params == () and run.demonstration_period in (None, 150)

@@ -83,9 +83,10 @@ def banner(experiment: str, made: Provenance | None, expected: str) -> str:
                 "them.")
     else:
         said = (f"> **Stale.** The figures of this page come from commit {made.commit} "
-                f"(learner fingerprint `{made.fingerprint}`); the learner has changed since "
-                f"(today's fingerprint is `{expected}`), so they may differ from what today's "
-                f"code makes. `ros_ws/reproduce.sh {experiment}` makes them again.")
+                f"(learner fingerprint `{made.fingerprint}`); its runs have changed since, by "
+                f"the learner's code or by what the experiment pins (today's fingerprint is "
+                f"`{expected}`), so they may differ from what today's code makes. "
+                f"`ros_ws/reproduce.sh {experiment}` makes them again.")
     return f"<!-- stale {experiment}: begin -->\n{said}\n\n<!-- stale {experiment}: end -->\n"
 
 
