@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from sgim_nodes.experiments import cli, pages, pinned, world_jobs
+from sgim_nodes.experiments import cli, pages, pinned, shipped, world_jobs
 from sgim_nodes.experiments.pinned import pin_of
 from sgim_nodes.provenance.fingerprint import data_files
 
@@ -65,6 +65,19 @@ def test_reproduce_makes_the_runs_once_and_writes_the_page(repo, capsys):
     assert "2 runs, 2 already made, 0 to do" in capsys.readouterr().err
     assert {p: p.stat().st_mtime_ns for p in runs} == before
     assert cli.main(["--check"]) == 0
+    # shipped: without its runs, the same page from the shipped result files
+    folder = shipped.SHIPPED / "pond"
+    assert sorted(p.name for p in folder.iterdir()) == [
+        "casts-seed3-chunk0.npz", "casts-seed3-chunk1.npz", "stamps.yaml"]
+    (repo / "runs" / "pond").rename(repo / "runs" / "gone")
+    assert cli.main(["pond", "--report-only"]) == 0
+    after = (repo / "docs" / "pond.md").read_text()
+    assert {n: b for n, b in pages.blocks_of(after).items() if n != "provenance"} == \
+        {n: b for n, b in pages.blocks_of(text).items() if n != "provenance"}
+    # a result file of behaviour other than today's is not used
+    stamps = folder / "stamps.yaml"
+    stamps.write_text(stamps.read_text().replace(": ", ": 0", 1))
+    assert cli.main(["pond", "--report-only"]) == 2
 
 
 def test_check_finds_a_stale_page_and_mark_stale_bannering_it(repo, capsys):

@@ -311,13 +311,13 @@ def verify_runs(exp: Experiment, args: argparse.Namespace) -> int:
 
 
 def ship_runs(exp: Experiment, runs_dir: Path) -> None:
-    from sgim_nodes.experiments.shipped import SHIPPED, behaviours, ship_folder
+    from sgim_nodes.experiments.shipped import SHIPPED, behaviours, ship_folder, ship_results
 
-    if exp.maker == "graph" and not behaviours(exp):
+    if not behaviours(exp):
         say(f"{exp.name}: no run shipped: its reference runs are not today's code's "
             "(`ros_ws/reproduce.sh --references` makes them)")
         return
-    written = ship_folder(exp, runs_dir)
+    written = (ship_folder if exp.maker == "graph" else ship_results)(exp, runs_dir)
     if written:
         say(f"{exp.name}: shipped {len(written)} run table(s) in {_shown(SHIPPED)} "
             f"({sum(p.stat().st_size for p in written) / 1e6:.1f} MB)")

@@ -95,3 +95,81 @@ def ship_folder(experiment: Experiment, runs_dir: Path, folder: Path | None = No
     made = [run for run in load_study(runs_dir, warn=lambda message: None).runs
             if run.name in names]
     return ship(experiment, made, folder)
+
+
+# --- runner and world experiments: their result files ---------------------------------------
+
+STAMPS = "stamps.yaml"
+"""Beside a runner or world experiment's shipped result files: job name -> its behaviour."""
+
+
+def results_folder(experiment: Experiment, folder: Path | None = None) -> Path:
+    """Where a runner or world experiment's result files are shipped (one folder each: their
+    job names are the experiment's own)."""
+    return (folder or SHIPPED) / experiment.name
+
+
+def _file_jobs(experiment: Experiment):
+    from sgim_nodes.experiments import runner_jobs, world_jobs
+
+    if experiment.maker == "runner":
+        return experiment.runner_jobs, runner_jobs
+    return experiment.world_jobs, world_jobs
+
+
+def _stamps(folder: Path) -> dict[str, str]:
+    import yaml
+
+    try:
+        found = yaml.safe_load((folder / STAMPS).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return {str(k): str(v) for k, v in found.items()} if isinstance(found, dict) else {}
+
+
+def ship_results(experiment: Experiment, runs_dir: Path, folder: Path | None = None
+                 ) -> list[Path]:
+    """Copy each result file `runs_dir` holds made by today's code into the experiment's
+    shipped folder, its behaviour in the folder's stamps; the paths written."""
+    import yaml
+
+    from sgim_nodes.experiments.makers import fingerprint_value
+
+    today = behaviours(experiment)
+    if not today or not runs_dir.is_dir():
+        return []
+    jobs, module = _file_jobs(experiment)
+    target = results_folder(experiment, folder)
+    stamps, written = _stamps(target), []
+    for job in jobs:
+        made = module.result_path(runs_dir, job)
+        found = module.read_result(made) if made.is_file() else None
+        if found is None or fingerprint_value(found) != job.fingerprint().value:
+            continue
+        target.mkdir(parents=True, exist_ok=True)
+        path = target / made.name
+        if not path.is_file() or path.read_bytes() != made.read_bytes():
+            tmp = path.with_name(f".{path.name}.tmp")
+            tmp.write_bytes(made.read_bytes())
+            tmp.replace(path)
+        stamps[job.name] = today[job.name]
+        written.append(path)
+    if written:
+        (target / STAMPS).write_text(yaml.safe_dump(dict(sorted(stamps.items()))),
+                                     encoding="utf-8")
+    return written
+
+
+def read_result(experiment: Experiment, runs_dir: Path, job) -> dict | None:
+    """A runner or world job's result: from the runs folder, else from the shipped file whose
+    stamp is today's behaviour; None when neither has it."""
+    _, module = _file_jobs(experiment)
+    made = module.result_path(runs_dir, job)
+    found = module.read_result(made) if made.is_file() else None
+    if found is not None:
+        return found
+    target = results_folder(experiment)
+    if _stamps(target).get(job.name) != behaviours(experiment).get(job.name):
+        return None
+    path = target / made.name
+    return module.read_result(path) if path.is_file() else None

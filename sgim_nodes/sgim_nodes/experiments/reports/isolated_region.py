@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sgim_nodes.experiments import world_jobs
+from sgim_nodes.experiments import shipped, world_jobs
 from sgim_nodes.experiments.pinned import Experiment
 from sgim_nodes.experiments.reports import Report
 
@@ -21,7 +21,7 @@ def make(experiment: Experiment, runs_dir: Path, figures_dir: Path) -> Report:
     for job in experiment.world_jobs:
         if not isinstance(job, world_jobs.CastChunk):
             continue  # a probe of the physics: the world report's
-        found = world_jobs.read_result(world_jobs.result_path(runs_dir, job))
+        found = shipped.read_result(experiment, runs_dir, job)
         if found is None:
             raise FileNotFoundError(f"{job.name} is not made yet: run the experiment first")
         chunks.append(found)

@@ -8,7 +8,7 @@ import numpy as np
 
 from sgim_nodes.core.learner_registry import RANDOM, RANDOM_GOALS, SAGGRIAC, SGIM_D
 from sgim_nodes.core.learner_registry import colour as learner_colour
-from sgim_nodes.experiments import runner_jobs
+from sgim_nodes.experiments import runner_jobs, shipped
 from sgim_nodes.experiments.pinned import Experiment
 from sgim_nodes.experiments.reports import Report
 
@@ -67,7 +67,7 @@ def figure(results: list[dict], floors: dict[str, float], eval_every: int, path:
 def load_results(experiment: Experiment, runs_dir: Path) -> list[dict]:
     out = []
     for job in experiment.runner_jobs:
-        found = runner_jobs.read_result(runner_jobs.result_path(runs_dir, job))
+        found = shipped.read_result(experiment, runs_dir, job)
         if found is None:
             raise FileNotFoundError(f"{job.name} is not made yet: run the experiment first")
         out.append(found | {"world": job.world, "learner": job.learner, "seed": job.seed})

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sgim_nodes.experiments import world_jobs
+from sgim_nodes.experiments import shipped, world_jobs
 from sgim_nodes.experiments.pinned import Experiment
 from sgim_nodes.experiments.reports import Report
 
@@ -25,7 +25,7 @@ RARE_SHARE = 0.1  # of the reachable map's cells (sim_bridge/tools/map_reachable
 def make(experiment: Experiment, runs_dir: Path, figures_dir: Path) -> Report:
     made: dict[str, list] = {}
     for job in experiment.world_jobs:
-        found = world_jobs.read_result(world_jobs.result_path(runs_dir, job))
+        found = shipped.read_result(experiment, runs_dir, job)
         if found is None:
             raise FileNotFoundError(f"{job.name} is not made yet: run the experiment first")
         kind = job.kind if isinstance(job, world_jobs.Probe) else "casts"
