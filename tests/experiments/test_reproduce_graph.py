@@ -11,6 +11,7 @@ import pytest
 from sgim_nodes.analysis import run_table
 from sgim_nodes.experiments import cli, pages, pinned, shipped
 from sgim_nodes.experiments.reports.study import own_runs  # noqa: F401  (imported: it loads)
+from sgim_nodes.provenance.record import machine
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
@@ -70,6 +71,7 @@ def test_a_graph_experiment_is_made_reported_and_shares_its_runs(scratch_repo, m
     assert "| sgim-d | 2 |" in blocks["final-errors"]
     assert "SAGG-RIAC is missing" in blocks["findings"]
     assert pages.provenance_of(results, "tiny").fingerprint == pinned.find("tiny").fingerprint()
+    assert f"made on {machine()}" in blocks["provenance"]  # where the runs were made
     assert sorted(digested) == ["random", "sgim-d"]
     readme = (tmp_path / "README.md").read_text()
     assert "| SGIM-D |" in pages.blocks_of(readme)["summary"]

@@ -307,6 +307,8 @@ def _save_cache(cache: Path, fingerprint: str, columns: dict[str, np.ndarray],
 
 
 def read_metadata(run_dir: Path, warn: Warn = _default_warn) -> dict:
+    """metadata.yaml, with the machine a sweep made the run on (its sweep_run.yaml) when the
+    metadata does not say."""
     meta = run_dir / "metadata.yaml"
     if not meta.exists():
         return {}
@@ -315,7 +317,21 @@ def read_metadata(run_dir: Path, warn: Warn = _default_warn) -> dict:
     except (OSError, yaml.YAMLError) as error:
         warn(f"{meta} is unreadable ({str(error).splitlines()[0]}): using the folder name")
         return {}
-    return data if isinstance(data, dict) else {}
+    if not isinstance(data, dict):
+        return {}
+    made_on = _sweep_machine(run_dir)
+    if made_on and "machine" not in data:
+        data["machine"] = made_on
+    return data
+
+
+def _sweep_machine(run_dir: Path) -> str | None:
+    try:
+        record = yaml.safe_load((run_dir / "sweep_run.yaml").read_text(encoding="utf-8"))
+        found = record["node"]["machine"]
+    except (OSError, yaml.YAMLError, KeyError, TypeError):
+        return None
+    return found if isinstance(found, str) else None
 
 
 def load_run_data(run_dir: Path, use_cache: bool = True, warn: Warn = _default_warn

@@ -23,6 +23,7 @@ from typing import Any
 
 from sgim_nodes.experiments.pinned import Experiment, runs_root
 from sgim_nodes.provenance.fingerprint import Fingerprint
+from sgim_nodes.provenance.record import machine
 
 UNLIKE_DIR = ".unlike"
 
@@ -132,7 +133,7 @@ def make_file_jobs(jobs: Sequence[Any], module: ModuleType, runs_dir: Path, para
     if not todo:
         return 0
     return _execute(todo, module.run_job, lambda job, result: module.write_result(
-        module.result_path(runs_dir, job), result), parallel, address)
+        module.result_path(runs_dir, job), {**result, "machine": machine()}), parallel, address)
 
 
 def _execute(todo: list[Any], work: Callable, keep: Callable, parallel: int,

@@ -227,7 +227,8 @@ def _collect(ray: Any, ref: Any, spec: RunSpec, sweep: Sweep, progress: Progress
     installing = time.time()
     record = {"sweep": str(sweep.path), "settings": spec.settings(),
               "node": {"id": result["node_id"], "label": progress.label(result["node_id"]),
-                       "hostname": result["hostname"], "worker_pid": result["pid"]},
+                       "hostname": result["hostname"], "worker_pid": result["pid"],
+                       **({"machine": result["machine"]} if "machine" in result else {})},
               "attempts": board.get("attempts", 1), "worker_commit": result["commit"],
               "task_started": datetime.fromtimestamp(result["started"], UTC).isoformat(),
               "task_ended": datetime.fromtimestamp(result["ended"], UTC).isoformat(),

@@ -38,6 +38,7 @@ from typing import Any
 from sgim_nodes.graph.batch import PROGRESS
 from sgim_nodes.graph.experiment_options import REPO
 from sgim_nodes.graph.processes import ProcessGroup
+from sgim_nodes.provenance.record import machine
 from sgim_nodes.sweep.results import read_yaml
 from sgim_nodes.sweep.sweep_file import RunSpec
 
@@ -183,7 +184,8 @@ def execute_run(spec: RunSpec, timeout: float, scratch: str | None = None,
         archive = _pack(run_dir, spec.name)
         return {"name": spec.name, "returncode": proc.returncode,
                 "outcome": meta.get("outcome", "no metadata.yaml"),
-                "node_id": node_id, "hostname": host, "pid": os.getpid(), "token": token,
+                "node_id": node_id, "hostname": host, "machine": machine(), "pid": os.getpid(),
+                "token": token,
                 "commit": worker_commit(), "started": began, "ended": time.time(),
                 "launch_s": round(launched - began, 3), "run_s": round(ran, 3),
                 "pack_s": round(time.time() - packing, 3), "archive": archive}

@@ -174,5 +174,7 @@ def make(experiment: Experiment, runs_dir: Path, figures_dir: Path) -> Report:
     report.add(page, "same-memory", same_memory(results))
     report.add(page, "probes", probes(results))
     seconds = sum(r["seconds"] for r in results)
-    report.notes.append(f"{len(results)} runs, {seconds / 3600:.1f} h of run time in all")
+    machines = sorted({str(r.get("machine") or "a machine not recorded") for r in results})
+    report.notes.append(f"{len(results)} runs, {seconds / 3600:.1f} h of run time in all, "
+                        f"made on {'; '.join(machines)}")
     return report
