@@ -62,7 +62,8 @@ def test_reproduce_makes_the_runs_once_and_writes_the_page(repo, capsys):
     # made again: nothing to cast, the same page
     before = {p: p.stat().st_mtime_ns for p in runs}
     assert cli.main(["pond"]) == 0
-    assert "2 runs, 2 already made, 0 to do" in capsys.readouterr().err
+    assert "2 run(s) shipped in experiments/shipped/ with today's behaviour: not made again" \
+        in capsys.readouterr().err
     assert {p: p.stat().st_mtime_ns for p in runs} == before
     assert cli.main(["--check"]) == 0
     # shipped: without its runs, the same page from the shipped result files
@@ -74,6 +75,11 @@ def test_reproduce_makes_the_runs_once_and_writes_the_page(repo, capsys):
     after = (repo / "docs" / "pond.md").read_text()
     assert {n: b for n, b in pages.blocks_of(after).items() if n != "provenance"} == \
         {n: b for n, b in pages.blocks_of(text).items() if n != "provenance"}
+    assert cli.main(["pond", "--runs-only"]) == 0  # shipped: nothing to cast again
+    assert not list((repo / "runs" / "pond").glob("*.npz"))
+    assert cli.main(["pond", "--runs-only", "--ignore-shipped"]) == 0
+    assert "2 runs, 0 already made, 2 to do" in capsys.readouterr().err
+    (repo / "runs" / "pond").rename(repo / "runs" / "gone again")
     # a result file of behaviour other than today's is not used
     stamps = folder / "stamps.yaml"
     stamps.write_text(stamps.read_text().replace(": ", ": 0", 1))

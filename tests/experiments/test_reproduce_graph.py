@@ -113,6 +113,12 @@ def test_a_graph_experiment_is_made_reported_and_shares_its_runs(scratch_repo, m
     assert {p.name: p.read_bytes() for p in (tmp_path / "docs" / "figures").iterdir()} \
         == figures
 
+    assert cli.main(["tiny", "--runs-only"]) == 0  # shipped: no run is made again
+    assert "4 run(s) shipped in experiments/shipped/ with today's behaviour: not made again" \
+        in capsys.readouterr().err
+    assert not (tmp_path / "runs" / "tiny").exists() or not any(
+        (tmp_path / "runs" / "tiny").glob("*-seed*"))
+
     # --verify makes shipped runs again, by the runner and through the graph: the same runs;
     # a table changed by one bit in one landing is found, its movement named
     assert cli.main(["tiny", "--verify", "4", "--verify-seed", "5"]) == 0

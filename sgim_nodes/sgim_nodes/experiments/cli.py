@@ -77,6 +77,8 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                    help="the seed that draws the runs --verify checks (default: one it prints)")
     p.add_argument("--graph", action="store_true",
                    help="--verify makes the runs through the node graph")
+    p.add_argument("--ignore-shipped", action="store_true",
+                   help="make the runs the repository ships too (experiments/shipped/)")
     p.add_argument("--keep-unlike", action="store_true",
                    help="keep runs made by another learner instead of making them again")
     p.add_argument("--list", action="store_true",
@@ -251,7 +253,8 @@ def reproduce(exp: Experiment, args: argparse.Namespace, command: str) -> int:
         return verify_runs(exp, args)
     if not args.report_only:
         say(f"{exp.name}: making its runs in {runs_dir} ({exp.maker})")
-        code = make_runs(exp, runs_dir, args.parallel, args.address, args.keep_unlike)
+        code = make_runs(exp, runs_dir, args.parallel, args.address, args.keep_unlike,
+                         not args.ignore_shipped)
         if code or args.runs_only:
             ship_runs(exp, runs_dir)  # what finished is kept, even when the rest failed
         if code:

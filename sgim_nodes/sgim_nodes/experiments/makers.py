@@ -33,25 +33,38 @@ def say(message: str) -> None:
 
 
 def make_runs(experiment: Experiment, runs_dir: Path, parallel: int, address: str | None,
-              keep_unlike: bool) -> int:
-    """Make what is missing; 0 when every run is there."""
+              keep_unlike: bool, use_shipped: bool = True) -> int:
+    """Make what is missing (a run the repository ships with today's behaviour is not, unless
+    `use_shipped` is off); 0 when every run is there."""
     runs_dir.mkdir(parents=True, exist_ok=True)
+    shipped: set[str] = set()
+    if use_shipped:
+        from sgim_nodes.experiments.shipped import shipped_names
+
+        shipped = shipped_names(experiment)
+        if shipped:
+            say(f"{len(shipped)} run(s) shipped in experiments/shipped/ with today's behaviour: "
+                "not made again (--ignore-shipped makes them)")
     if experiment.maker == "graph":
-        return _graph(experiment, runs_dir, parallel, address, keep_unlike)
+        runs = tuple(s for s in experiment.graph_runs if s.name not in shipped)
+        return _graph(experiment, runs, runs_dir, parallel, address, keep_unlike)
     from sgim_nodes.experiments import runner_jobs, world_jobs
 
     module = runner_jobs if experiment.maker == "runner" else world_jobs
     jobs = experiment.runner_jobs if experiment.maker == "runner" else experiment.world_jobs
+    jobs = [job for job in jobs if job.name not in shipped]
     return make_file_jobs(jobs, module, runs_dir, parallel, address, keep_unlike)
 
 
-def _graph(experiment: Experiment, runs_dir: Path, parallel: int, address: str | None,
-           keep_unlike: bool) -> int:
+def _graph(experiment: Experiment, runs: tuple, runs_dir: Path, parallel: int,
+           address: str | None, keep_unlike: bool) -> int:
     from sgim_nodes.sweep import driver
     from sgim_nodes.sweep.sweep_file import Sweep
 
+    if not runs:
+        return 0
     sweep = Sweep(experiment.path, experiment.name, runs_dir.absolute(),
-                  experiment.run_timeout, tuple(experiment.graph_runs))
+                  experiment.run_timeout, runs)
     # Siblings are where experiments' runs go, and beside a --runs-dir chosen elsewhere.
     roots = list(dict.fromkeys((runs_root().absolute(), runs_dir.absolute().parent)))
     linked = link_finished_elsewhere(sweep, roots)

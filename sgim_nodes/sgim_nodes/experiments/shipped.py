@@ -173,3 +173,24 @@ def read_result(experiment: Experiment, runs_dir: Path, job) -> dict | None:
         return None
     path = target / made.name
     return module.read_result(path) if path.is_file() else None
+
+
+def shipped_names(experiment: Experiment) -> set[str]:
+    """The runs or jobs of the experiment shipped with today's behaviour (stamps only: no
+    column is read), which need not be made again."""
+    today = behaviours(experiment)
+    if experiment.maker == "graph":
+        found = set()
+        for name, behaviour in today.items():
+            path = table_path(name)
+            try:
+                if path.is_file() and read_stamp(path).get("behaviour") == behaviour:
+                    found.add(name)
+            except (OSError, ValueError, KeyError, RunTableError):
+                continue
+        return found
+    jobs, module = _file_jobs(experiment)
+    target = results_folder(experiment)
+    stamps = _stamps(target)
+    return {job.name for job in jobs if job.name in today and stamps.get(job.name) ==
+            today[job.name] and (target / module.result_path(target, job).name).is_file()}
