@@ -80,8 +80,11 @@ def test_a_graph_experiment_is_made_reported_and_shares_its_runs(scratch_repo, m
     assert cli.main(["--check"]) == 1  # 'other' was never made
     capsys.readouterr()
 
-    # 'other' needs sgim-d seed 1 with the same settings: taken from 'tiny', not made again
-    assert cli.main(["other"]) == 0
+    # 'other' needs sgim-d seed 1 with the same settings: 'tiny' shipped it
+    assert cli.main(["other", "--runs-only"]) == 0
+    assert "1 run(s) shipped in experiments/shipped/" in capsys.readouterr().err
+    # without the shipped tables, it is taken from 'tiny''s folder, not made again
+    assert cli.main(["other", "--ignore-shipped"]) == 0
     err = capsys.readouterr().err
     assert "1 run(s) taken from other experiments" in err, err
     assert "sgim-d-P20-seed1 (tiny)" in err and "1 already finished, 0 to do" in err, err
@@ -92,7 +95,8 @@ def test_a_graph_experiment_is_made_reported_and_shares_its_runs(scratch_repo, m
 
     # A --runs-dir chosen elsewhere takes its runs from the experiments beside it too
     monkeypatch.setenv("SGIM_EXPERIMENT_RUNS", str(tmp_path / "nowhere"))
-    assert cli.main(["other", "--runs-only", "--runs-dir", str(tmp_path / "runs" / "o2")]) == 0
+    assert cli.main(["other", "--runs-only", "--ignore-shipped", "--runs-dir",
+                     str(tmp_path / "runs" / "o2")]) == 0
     err = capsys.readouterr().err
     assert "sgim-d-P20-seed1 (" in err and "1 already finished, 0 to do" in err, err
 
