@@ -16,7 +16,7 @@ from sgim_nodes.provenance.record import machine
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
 STUDY_BLOCKS = ("provenance", "final-errors", "error-curve", "pairwise", "isolated-coverage",
-                "isolated-tests", "goal-groups", "findings", "cost")
+                "isolated-tests", "goal-groups", "findings", "second-finding", "cost")
 
 
 def page(title: str, names) -> str:

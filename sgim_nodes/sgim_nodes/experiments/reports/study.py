@@ -5,6 +5,7 @@ findings checked against the runs, and what the study cost."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -14,17 +15,17 @@ from sgim_nodes.analysis.floor import benchmark_floor
 from sgim_nodes.analysis.report import (
     StudyNumbers,
     num,
-    pairwise_table,
+    pairwise_markdown,
     pval,
     render,
     study_numbers,
     table,
 )
-from sgim_nodes.analysis.statistics import ALPHA, PairTest, demonstration_times
+from sgim_nodes.analysis.statistics import ALPHA, PairTest, compare_groups, demonstration_times
 from sgim_nodes.analysis.study import RunData, Study
 from sgim_nodes.core.learner_registry import DEMO_ONLY, RANDOM, SAGGRIAC, SGIM_D, display_name
 from sgim_nodes.experiments.pinned import Experiment
-from sgim_nodes.experiments.reports import Report
+from sgim_nodes.experiments.reports import Report, second_finding
 from sgim_nodes.experiments.reports.graph_study import load, run_time_note, wall_span
 
 NEAR = 0.1
@@ -41,9 +42,10 @@ def make(experiment: Experiment, runs_dir: Path, figures_dir: Path) -> Report:
     for name, text in render(numbers).items():
         report.add(page, name, text)
     report.figures += draw(study, numbers, figures_dir)
-    groups, goal_table = goal_groups(study)
-    report.add(page, "goal-groups", goal_table)
-    report.add(page, "findings", findings(numbers, groups))
+    groups = goal_groups(study)
+    report.add(page, "goal-groups", groups.text)
+    report.add(page, "findings", findings(numbers, groups.values))
+    report.add(page, "second-finding", second_finding.block(numbers, groups))
     report.add(page, "cost", cost(study))
     report.add(readme, "summary", summary(numbers))
     report.notes.append(run_time_note(study))
@@ -71,9 +73,20 @@ def _final_distances(run: RunData, goals: np.ndarray) -> np.ndarray | None:
     return np.asarray(run.eval_distances[-1], float)
 
 
-def goal_groups(study: Study) -> tuple[dict[str, dict[str, list[float]]], str]:
-    """Each run's final error on the goals near a demonstrated outcome, farther, and in the
-    isolated region; SGIM-D against every other learner on each, Holm-corrected together."""
+@dataclass(frozen=True)
+class GoalGroups:
+    """Each group's mean final distance per learner (runs in seed order, with their seeds),
+    the goals of each group, and SGIM-D against each learner group by group, corrected."""
+
+    values: dict[str, dict[str, list[float]]]
+    seeds: dict[str, list[int]]
+    masks: dict[str, np.ndarray]
+    tests: list[PairTest]
+    text: str
+
+
+def goal_masks() -> dict[str, np.ndarray]:
+    """The benchmark goals near a demonstrated outcome, farther, in the isolated region, all."""
     from sim_bridge.data_files import load_benchmark_goals, load_teaching_set
     from sim_bridge.lake import ISOLATED_REGION
 
@@ -82,13 +95,24 @@ def goal_groups(study: Study) -> tuple[dict[str, dict[str, list[float]]], str]:
     to_demo = np.sqrt(((goals[:, None, :] - taught[None, :, :]) ** 2).sum(-1)).min(1)
     pond = np.sqrt(((goals - np.asarray(ISOLATED_REGION["centre"])) ** 2).sum(-1)) \
         <= ISOLATED_REGION["radius"]
-    subsets = {"near": (to_demo < NEAR) & ~pond, "far": (to_demo >= NEAR) & ~pond,
-               "pond": pond, "all": np.ones(len(goals), bool)}
+    return {"near": (to_demo < NEAR) & ~pond, "far": (to_demo >= NEAR) & ~pond,
+            "pond": pond, "all": np.ones(len(goals), bool)}
+
+
+def goal_groups(study: Study) -> GoalGroups:
+    """Each run's final error on the goals near a demonstrated outcome, farther, and in the
+    isolated region; SGIM-D against every other learner on each, Holm-corrected together."""
+    from sim_bridge.data_files import load_benchmark_goals
+
+    goals = np.asarray(load_benchmark_goals(), float)
+    subsets = goal_masks()
     groups: dict[str, dict[str, list[float]]] = {name: {} for name in subsets}
+    seeds: dict[str, list[int]] = {}
     for learner in study.learners:
         for run in study.runs_of(learner):
             d = _final_distances(run, goals)
             if d is not None:
+                seeds.setdefault(learner, []).append(run.seed)
                 for name, mask in subsets.items():
                     groups[name].setdefault(learner, []).append(float(d[mask].mean()))
     rows = []
@@ -104,12 +128,13 @@ def goal_groups(study: Study) -> tuple[dict[str, dict[str, list[float]]], str]:
                 for learner, values in groups[g].items()}
     pairs = [(f"{SGIM_D} ({g})", f"{other} ({g})") for g in ("near", "far", "pond")
              for other in study.learners if other != SGIM_D and SGIM_D in groups[g]]
+    tests = compare_groups(labelled, pairs)
     text = "\n".join(head) + (
         f"\n\nMean over runs of each run's mean final distance on the goals of the group "
         f"(goals split by their distance to the nearest demonstrated outcome of the teaching "
         f"set; the split at {NEAR} was chosen before the first study was looked at).\n\n"
-        "SGIM-D against each learner, group by group:\n\n" + pairwise_table(labelled, pairs))
-    return groups, text
+        "SGIM-D against each learner, group by group:\n\n" + pairwise_markdown(tests))
+    return GoalGroups(groups, seeds, subsets, tests, text)
 
 
 def _test(numbers: StudyNumbers, a: str, b: str) -> PairTest | None:
