@@ -104,11 +104,6 @@ def link_finished_elsewhere(sweep, roots: Sequence[Path]) -> list[str]:
     return linked
 
 
-def fingerprint_value(result: dict[str, Any]) -> str:
-    """The fingerprint value a result file records ('' when none)."""
-    return _fingerprint_of(result)[0]
-
-
 def _fingerprint_of(result: dict[str, Any]) -> tuple[str, Fingerprint | None]:
     made = result.get("fingerprint")
     if isinstance(made, dict):

@@ -133,8 +133,6 @@ def ship_results(experiment: Experiment, runs_dir: Path, folder: Path | None = N
     shipped folder, its behaviour in the folder's stamps; the paths written."""
     import yaml
 
-    from sgim_nodes.experiments.makers import fingerprint_value
-
     today = behaviours(experiment)
     if not today or not runs_dir.is_dir():
         return []
@@ -144,7 +142,7 @@ def ship_results(experiment: Experiment, runs_dir: Path, folder: Path | None = N
     for job in jobs:
         made = module.result_path(runs_dir, job)
         found = module.read_result(made) if made.is_file() else None
-        if found is None or fingerprint_value(found) != job.fingerprint().value:
+        if found is None or _fingerprint_value(found) != job.fingerprint().value:
             continue
         target.mkdir(parents=True, exist_ok=True)
         path = target / made.name
@@ -158,6 +156,18 @@ def ship_results(experiment: Experiment, runs_dir: Path, folder: Path | None = N
         (target / STAMPS).write_text(yaml.safe_dump(dict(sorted(stamps.items()))),
                                      encoding="utf-8")
     return written
+
+
+def _fingerprint_value(result: dict) -> str:
+    """The fingerprint value a result file records (a runner's as a mapping, a world job's as
+    its value); '' when none."""
+    from sgim_nodes.provenance.fingerprint import Fingerprint
+
+    made = result.get("fingerprint")
+    if isinstance(made, dict):
+        found = Fingerprint.from_dict(made)
+        return found.value if found else ""
+    return str(made or "")
 
 
 def read_result(experiment: Experiment, runs_dir: Path, job) -> dict | None:

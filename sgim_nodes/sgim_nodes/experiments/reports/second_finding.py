@@ -8,7 +8,7 @@ played no part in writing S1-S4, and asks only for the signs of the differences.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
@@ -16,9 +16,6 @@ from sgim_nodes.analysis.report import StudyNumbers, num, pval, table
 from sgim_nodes.analysis.statistics import PairTest
 from sgim_nodes.core.learner_registry import DEMO_ONLY, SGIM_D
 from sgim_nodes.experiments.reports.acts_choices import Verdict
-
-if TYPE_CHECKING:
-    from sgim_nodes.experiments.reports.study import GoalGroups
 
 NEW_SEEDS = range(10, 20)
 """The seeds of SGIM-D and demonstrations only added to decide the finding."""
@@ -76,8 +73,9 @@ def judge(overall: PairTest | None, by_group: dict[str, PairTest | None],
     return out
 
 
-def new_seed_differences(groups: GoalGroups) -> dict[str, float | None]:
-    """Per goal group, SGIM-D's mean minus demonstrations only's over NEW_SEEDS."""
+def new_seed_differences(groups: Any) -> dict[str, float | None]:
+    """Per goal group, SGIM-D's mean minus demonstrations only's over NEW_SEEDS; `groups` is
+    study.GoalGroups (its values and seeds)."""
     out: dict[str, float | None] = {}
     for group in ("all", "far", "near"):
         means = []
@@ -91,8 +89,9 @@ def new_seed_differences(groups: GoalGroups) -> dict[str, float | None]:
     return out
 
 
-def block(numbers: StudyNumbers, groups: GoalGroups) -> str:
-    """The page's block: each pinned prediction, what the runs gave, held or failed."""
+def block(numbers: StudyNumbers, groups: Any) -> str:
+    """The page's block (`groups`: study.GoalGroups): each pinned prediction, what the runs
+    gave, held or failed."""
     overall = _find(numbers.tests, SGIM_D, DEMO_ONLY)
     by_group = {g: _find(groups.tests, f"{SGIM_D} ({g})", f"{DEMO_ONLY} ({g})")
                 for g in ("far", "near", "pond")}
