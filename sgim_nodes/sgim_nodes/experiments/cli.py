@@ -254,7 +254,7 @@ def reproduce(exp: Experiment, args: argparse.Namespace, command: str) -> int:
     if not args.report_only:
         say(f"{exp.name}: making its runs in {runs_dir} ({exp.maker})")
         code = make_runs(exp, runs_dir, args.parallel, args.address, args.keep_unlike,
-                         not args.ignore_shipped)
+                         () if args.ignore_shipped else shipped_already(exp))
         if code or args.runs_only:
             ship_runs(exp, runs_dir)  # what finished is kept, even when the rest failed
         if code:
@@ -311,6 +311,17 @@ def verify_runs(exp: Experiment, args: argparse.Namespace) -> int:
     say(f"{exp.name}: {len(found) - len(wrong)} of {len(found)} runs made again the same"
         + (f"; differ: {', '.join(wrong)}" if wrong else ""))
     return 1 if wrong else 0
+
+
+def shipped_already(exp: Experiment) -> set[str]:
+    """The runs the repository ships with today's behaviour: not made again."""
+    from sgim_nodes.experiments.shipped import shipped_names
+
+    names = shipped_names(exp)
+    if names:
+        say(f"{len(names)} run(s) shipped in experiments/shipped/ with today's behaviour: "
+            "not made again (--ignore-shipped makes them)")
+    return names
 
 
 def ship_runs(exp: Experiment, runs_dir: Path) -> None:

@@ -14,7 +14,7 @@ import os
 import shutil
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from multiprocessing import get_context
 from pathlib import Path
@@ -33,26 +33,18 @@ def say(message: str) -> None:
 
 
 def make_runs(experiment: Experiment, runs_dir: Path, parallel: int, address: str | None,
-              keep_unlike: bool, use_shipped: bool = True) -> int:
-    """Make what is missing (a run the repository ships with today's behaviour is not, unless
-    `use_shipped` is off); 0 when every run is there."""
+              keep_unlike: bool, skip: Collection[str] = ()) -> int:
+    """Make what is missing, but the runs or jobs named in `skip`; 0 when every run is
+    there."""
     runs_dir.mkdir(parents=True, exist_ok=True)
-    shipped: set[str] = set()
-    if use_shipped:
-        from sgim_nodes.experiments.shipped import shipped_names
-
-        shipped = shipped_names(experiment)
-        if shipped:
-            say(f"{len(shipped)} run(s) shipped in experiments/shipped/ with today's behaviour: "
-                "not made again (--ignore-shipped makes them)")
     if experiment.maker == "graph":
-        runs = tuple(s for s in experiment.graph_runs if s.name not in shipped)
+        runs = tuple(s for s in experiment.graph_runs if s.name not in skip)
         return _graph(experiment, runs, runs_dir, parallel, address, keep_unlike)
     from sgim_nodes.experiments import runner_jobs, world_jobs
 
     module = runner_jobs if experiment.maker == "runner" else world_jobs
     jobs = experiment.runner_jobs if experiment.maker == "runner" else experiment.world_jobs
-    jobs = [job for job in jobs if job.name not in shipped]
+    jobs = [job for job in jobs if job.name not in skip]
     return make_file_jobs(jobs, module, runs_dir, parallel, address, keep_unlike)
 
 
@@ -104,7 +96,9 @@ def link_finished_elsewhere(sweep, roots: Sequence[Path]) -> list[str]:
     return linked
 
 
-def _fingerprint_of(result: dict[str, Any]) -> tuple[str, Fingerprint | None]:
+def result_fingerprint(result: dict[str, Any]) -> tuple[str, Fingerprint | None]:
+    """The fingerprint a result file records: its value ('' when none) and, for a runner's
+    (a mapping), the fingerprint itself."""
     made = result.get("fingerprint")
     if isinstance(made, dict):
         found = Fingerprint.from_dict(made)
@@ -122,7 +116,7 @@ def make_file_jobs(jobs: Sequence[Any], module: ModuleType, runs_dir: Path, para
         if found is None:
             todo.append(job)
             continue
-        value, recorded = _fingerprint_of(found)
+        value, recorded = result_fingerprint(found)
         expected = job.fingerprint()
         if value == expected.value:
             continue

@@ -22,6 +22,7 @@ from pathlib import Path
 from sgim_nodes.analysis.pooling import run_fingerprint
 from sgim_nodes.analysis.run_table import RunTableError, load_run, read_stamp, save_run
 from sgim_nodes.analysis.study import RunData
+from sgim_nodes.experiments.makers import result_fingerprint
 from sgim_nodes.experiments.pinned import REPO, Experiment
 from sgim_nodes.experiments.references import ReferencesOutdated, read_table, run_behaviours
 
@@ -43,18 +44,31 @@ def behaviours(experiment: Experiment) -> dict[str, str]:
         return {}
 
 
-def shipped_runs(experiment: Experiment, folder: Path | None = None,
-                 warn: Callable[[str], None] = lambda message: None) -> dict[str, RunData]:
-    """The experiment's runs the repository ships with today's behaviour, by name."""
-    found: dict[str, RunData] = {}
+def todays_tables(experiment: Experiment, folder: Path | None = None,
+                  warn: Callable[[str], None] = lambda message: None) -> dict[str, Path]:
+    """The experiment's run tables stamped with today's behaviour, by run name (stamps only:
+    no column is read)."""
+    found: dict[str, Path] = {}
     for name, behaviour in behaviours(experiment).items():
         path = table_path(name, folder)
         if not path.is_file():
             continue
         try:
-            if read_stamp(path).get("behaviour") != behaviour:
+            if read_stamp(path).get("behaviour") == behaviour:
+                found[name] = path
+            else:
                 warn(f"{path.name}: made by code that moved otherwise: not used")
-                continue
+        except (OSError, ValueError, KeyError, RunTableError) as error:
+            warn(f"{path.name}: unreadable ({error}): not used")
+    return found
+
+
+def shipped_runs(experiment: Experiment, folder: Path | None = None,
+                 warn: Callable[[str], None] = lambda message: None) -> dict[str, RunData]:
+    """The experiment's runs the repository ships with today's behaviour, by name."""
+    found: dict[str, RunData] = {}
+    for name, path in todays_tables(experiment, folder, warn).items():
+        try:
             found[name] = load_run(path)
         except (OSError, ValueError, KeyError, RunTableError) as error:
             warn(f"{path.name}: unreadable ({error}): not used")
@@ -91,10 +105,7 @@ def ship_folder(experiment: Experiment, runs_dir: Path, folder: Path | None = No
 
     if experiment.maker != "graph" or not runs_dir.is_dir():
         return []
-    names = set(experiment.run_fingerprints())
-    made = [run for run in load_study(runs_dir, warn=lambda message: None).runs
-            if run.name in names]
-    return ship(experiment, made, folder)
+    return ship(experiment, load_study(runs_dir, warn=lambda message: None).runs, folder)
 
 
 # --- runner and world experiments: their result files ---------------------------------------
@@ -142,7 +153,7 @@ def ship_results(experiment: Experiment, runs_dir: Path, folder: Path | None = N
     for job in jobs:
         made = module.result_path(runs_dir, job)
         found = module.read_result(made) if made.is_file() else None
-        if found is None or _fingerprint_value(found) != job.fingerprint().value:
+        if found is None or result_fingerprint(found)[0] != job.fingerprint().value:
             continue
         target.mkdir(parents=True, exist_ok=True)
         path = target / made.name
@@ -156,18 +167,6 @@ def ship_results(experiment: Experiment, runs_dir: Path, folder: Path | None = N
         (target / STAMPS).write_text(yaml.safe_dump(dict(sorted(stamps.items()))),
                                      encoding="utf-8")
     return written
-
-
-def _fingerprint_value(result: dict) -> str:
-    """The fingerprint value a result file records (a runner's as a mapping, a world job's as
-    its value); '' when none."""
-    from sgim_nodes.provenance.fingerprint import Fingerprint
-
-    made = result.get("fingerprint")
-    if isinstance(made, dict):
-        found = Fingerprint.from_dict(made)
-        return found.value if found else ""
-    return str(made or "")
 
 
 def read_result(experiment: Experiment, runs_dir: Path, job) -> dict | None:
@@ -188,17 +187,9 @@ def read_result(experiment: Experiment, runs_dir: Path, job) -> dict | None:
 def shipped_names(experiment: Experiment) -> set[str]:
     """The runs or jobs of the experiment shipped with today's behaviour (stamps only: no
     column is read), which need not be made again."""
-    today = behaviours(experiment)
     if experiment.maker == "graph":
-        found = set()
-        for name, behaviour in today.items():
-            path = table_path(name)
-            try:
-                if path.is_file() and read_stamp(path).get("behaviour") == behaviour:
-                    found.add(name)
-            except (OSError, ValueError, KeyError, RunTableError):
-                continue
-        return found
+        return set(todays_tables(experiment))
+    today = behaviours(experiment)
     jobs, module = _file_jobs(experiment)
     target = results_folder(experiment)
     stamps = _stamps(target)
