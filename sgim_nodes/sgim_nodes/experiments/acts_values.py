@@ -15,19 +15,17 @@ there (the learner's own). docs/active_strategies.md's P2 reads them.
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from sgim_nodes.analysis.run_table import write_arrays
 from sgim_nodes.analysis.study import OUTCOME_SIZE, RunData
 from sgim_nodes.core.strategies import AUTONOMOUS
+from sgim_nodes.experiments.verify import RunnerTwin, first_unequal, landing
 from sgim_nodes.sweep.sweep_file import RunSpec
 
-ENV = "fishing"
 SUFFIX = ".values.npz"
 COLUMNS = ("count", "strategy", "answered", "value", "own", "outcome")
 
@@ -36,28 +34,10 @@ class ReplayMismatch(RuntimeError):
     """The replay did not land where the run landed: its values are not the run's."""
 
 
-def config_of(spec: RunSpec):
-    """The LearnerConfig a graph run of `spec` gives its learner: the defaults and the
-    experiment's learner parameters."""
-    from sgim_nodes.core.config import LearnerConfig
-
-    fields = {f.name for f in dataclasses.fields(LearnerConfig)}
-    return LearnerConfig(**{name: yaml.safe_load(text) for name, text in spec.params
-                            if name in fields})
-
-
 def replay(spec: RunSpec) -> dict[str, np.ndarray]:
     """Replay the SGIM-ACTS run of `spec` with its chooser observed (module docstring)."""
-    from sgim_nodes.core.acts_runner import experts_for, run_acts
-    from sgim_nodes.core.learner_registry import make_learner
-    from sgim_nodes.core.runner import build_world
-
-    world = build_world(ENV, spec.seed)
-    experts = experts_for(ENV, world, spec.seed)
-    learner = make_learner(spec.learner, world.env.action_dim, world.env.outcome_dim,
-                           spec.seed, config=config_of(spec), scale=world.scale,
-                           teachers=tuple(experts))
-    chooser = learner.chooser
+    twin = RunnerTwin.of(spec)
+    chooser = twin.learner.chooser
     own = next(s for s in chooser.strategies if s.kind == AUTONOMOUS)
     seen: list[tuple[float, float]] = []
     draw = chooser.sample
@@ -71,15 +51,14 @@ def replay(spec: RunSpec) -> dict[str, np.ndarray]:
         return choice
 
     chooser.sample = observed
-    landed: list[Any] = []
+    landed: list[list[float]] = []
 
     def keep(record: dict[str, Any]) -> None:
-        if record["type"] == "movement" and record["label"] != "evaluation":
-            outcome = record["outcome"]
-            landed.append(outcome if outcome is not None else [np.nan] * OUTCOME_SIZE)
+        if record["type"] == "movement":
+            landed.append(landing(record))
 
-    run_acts(learner, world, spec.movements, spec.eval_every, experts, keep)
-    logs = learner.choices
+    twin.run(keep)
+    logs = twin.learner.choices
     return {"count": np.array([c.movement for c in logs], dtype=np.int64),
             "strategy": np.array([c.strategy for c in logs], dtype=str),
             "answered": np.array([bool(c.answered) for c in logs]),
@@ -90,12 +69,9 @@ def replay(spec: RunSpec) -> dict[str, np.ndarray]:
 
 def check_same_run(values: dict[str, np.ndarray], run: RunData) -> None:
     """ReplayMismatch unless the replay landed where `run` landed, movement for movement."""
-    if not np.array_equal(values["outcome"], run.outcome, equal_nan=True):
-        same = min(len(values["outcome"]), len(run.outcome))
-        differ = np.flatnonzero(~np.all(np.isclose(values["outcome"][:same], run.outcome[:same],
-                                                   rtol=0, atol=0, equal_nan=True), axis=1))
-        first = int(differ[0]) + 1 if len(differ) else same + 1
-        raise ReplayMismatch(f"{run.name}: the replay's movement {first} is not the run's "
+    first = first_unequal(values["outcome"], run.outcome)
+    if first is not None:
+        raise ReplayMismatch(f"{run.name}: the replay's movement {first + 1} is not the run's "
                              f"({len(values['outcome'])} movements replayed, "
                              f"{len(run.outcome)} recorded)")
 

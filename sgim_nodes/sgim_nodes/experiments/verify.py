@@ -40,6 +40,20 @@ class Verified:
         return not self.difference
 
 
+def config_of(spec: RunSpec):
+    """The LearnerConfig a graph run of `spec` gives its learner: the defaults and the
+    experiment's learner parameters."""
+    import dataclasses
+
+    import yaml
+
+    from sgim_nodes.core.config import LearnerConfig
+
+    fields = {f.name for f in dataclasses.fields(LearnerConfig)}
+    return LearnerConfig(**{name: yaml.safe_load(text) for name, text in spec.params
+                            if name in fields})
+
+
 def social_of(spec: RunSpec):
     """The runner's SocialConfig for a graph run: its period and the social parameters."""
     import dataclasses
@@ -58,36 +72,62 @@ def social_of(spec: RunSpec):
     return SocialConfig(**given)
 
 
-def runner_columns(spec: RunSpec) -> dict[str, np.ndarray]:
-    """The compared columns of `spec`'s run made by the runner."""
-    from sgim_nodes.core.acts_runner import experts_for, run_acts
-    from sgim_nodes.core.environment import PROCESS_CODES
-    from sgim_nodes.core.learner_registry import SGIM_ACTS, make_learner
-    from sgim_nodes.core.runner import build_world, run
-    from sgim_nodes.experiments.acts_values import config_of
+@dataclass
+class RunnerTwin:
+    """What the runner makes a graph run of `spec` with: its world, its learner and, for a
+    learner that asks its own teachers, those teachers (None for the others)."""
 
-    world = build_world(ENV, spec.seed)
-    records: list[dict[str, Any]] = []
-    if spec.learner == SGIM_ACTS:
-        experts = experts_for(ENV, world, spec.seed)
+    spec: RunSpec
+    world: Any
+    learner: Any
+    experts: dict[str, Any] | None
+
+    @classmethod
+    def of(cls, spec: RunSpec) -> RunnerTwin:
+        from sgim_nodes.core.acts_runner import experts_for
+        from sgim_nodes.core.learner_registry import learner_kind, make_learner
+        from sgim_nodes.core.runner import build_world
+
+        world = build_world(ENV, spec.seed)
+        experts = (experts_for(ENV, world, spec.seed)
+                   if learner_kind(spec.learner).chooses_teachers else None)
         learner = make_learner(spec.learner, world.env.action_dim, world.env.outcome_dim,
                                spec.seed, config=config_of(spec), scale=world.scale,
-                               teachers=tuple(experts))
-        run_acts(learner, world, spec.movements, spec.eval_every, experts, records.append)
-    else:
-        learner = make_learner(spec.learner, world.env.action_dim, world.env.outcome_dim,
-                               spec.seed, config=config_of(spec), scale=world.scale)
-        run(learner, world, spec.movements, spec.eval_every, spec.seed, records.append,
-            social_of(spec))
+                               teachers=tuple(experts or ()))
+        return cls(spec, world, learner, experts)
+
+    def run(self, write: Callable[[dict[str, Any]], None]) -> None:
+        """Make the run, each record to `write` (core/runner.py's and acts_runner.py's)."""
+        from sgim_nodes.core.acts_runner import run_acts
+        from sgim_nodes.core.runner import run
+
+        spec = self.spec
+        if self.experts is not None:
+            run_acts(self.learner, self.world, spec.movements, spec.eval_every, self.experts,
+                     write)
+        else:
+            run(self.learner, self.world, spec.movements, spec.eval_every, spec.seed, write,
+                social_of(spec))
+
+
+def landing(record: dict[str, Any]) -> list[float]:
+    """A movement record's outcome, NaN when the cast gave none (as RunData.outcome)."""
+    return record["outcome"] if record["outcome"] is not None else [np.nan] * OUTCOME_SIZE
+
+
+def runner_columns(spec: RunSpec) -> dict[str, np.ndarray]:
+    """The compared columns of `spec`'s run made by the runner."""
+    from sgim_nodes.core.environment import PROCESS_CODES
+
+    records: list[dict[str, Any]] = []
+    RunnerTwin.of(spec).run(records.append)
     moves = [r for r in records if r["type"] == "movement"]
     evaluations = {int(r["movements"]): float(r["mean_distance"])
                    for r in records if r["type"] == "evaluation"}
     return {
         "process": np.array([PROCESS_CODES[m["label"]] for m in moves], dtype=np.uint8),
         "status": np.array([m["status"] for m in moves], dtype=np.uint8),
-        "outcome": np.array([m["outcome"] if m["outcome"] is not None
-                             else [np.nan] * OUTCOME_SIZE for m in moves],
-                            dtype=float).reshape(-1, OUTCOME_SIZE),
+        "outcome": np.array([landing(m) for m in moves], dtype=float).reshape(-1, OUTCOME_SIZE),
         "eval_index": np.array(sorted(evaluations), dtype=np.int64),
         "eval_mean": np.array([evaluations[k] for k in sorted(evaluations)], dtype=float),
         "demo_index": _demonstration_counts(records)}
@@ -99,6 +139,21 @@ def _demonstration_counts(records: list[dict[str, Any]]) -> np.ndarray:
     return np.array([r["movement"] for r in records
                      if r["type"] == "demonstration"
                      or (r["type"] == "answer" and r.get("answered"))], dtype=np.int64)
+
+
+def first_unequal(mine: np.ndarray, theirs: np.ndarray) -> int | None:
+    """The first row (entry of a 1-D column) where two columns differ, to the bit (NaN equal
+    to NaN); the shorter's length when one only stops early; None when they are equal."""
+    mine, theirs = np.asarray(mine), np.asarray(theirs)
+    same = min(len(mine), len(theirs))
+    a, b = mine[:same], theirs[:same]
+    equal = (np.isclose(a, b, rtol=0, atol=0, equal_nan=True) if a.dtype.kind == "f"
+             else a == b)
+    if equal.ndim > 1:
+        equal = equal.all(axis=tuple(range(1, equal.ndim)))
+    if not equal.all():
+        return int(np.flatnonzero(~equal)[0])
+    return None if len(mine) == len(theirs) else same
 
 
 def graph_columns(spec: RunSpec, work: Path, timeout: float) -> dict[str, np.ndarray]:
@@ -124,13 +179,8 @@ def difference(made: dict[str, np.ndarray], shipped: RunData,
         mine, theirs = np.asarray(made[name]), np.asarray(getattr(shipped, name))
         if mine.shape != theirs.shape:
             return f"{name}: {len(mine)} made, {len(theirs)} shipped"
-        kind = mine.dtype.kind == "f"
-        equal = (np.isclose(mine, theirs, rtol=0, atol=0, equal_nan=True) if kind
-                 else mine == theirs)
-        if equal.ndim > 1:
-            equal = equal.all(axis=tuple(range(1, equal.ndim)))
-        if not equal.all():
-            k = int(np.flatnonzero(~equal)[0])
+        k = first_unequal(mine, theirs)
+        if k is not None:
             where = f"movement {k + 1}" if name in ("process", "status", "outcome") else \
                 f"entry {k}"
             return f"{name} differs first at {where}: {mine[k]} made, {theirs[k]} shipped"
