@@ -182,6 +182,11 @@ def compare(a: str, va: Sequence[float], b: str, vb: Sequence[float]) -> PairTes
                     mann_whitney_p_holm=mw_p, **base)
 
 
+def find_test(tests: Sequence[PairTest], a: str, b: str) -> PairTest | None:
+    """The test of `a` against `b`, whichever side each is on; None when there is none."""
+    return next((t for t in tests if {t.a, t.b} == {a, b}), None)
+
+
 def compare_groups(groups: Mapping[str, Sequence[float]],
                    pairs: Sequence[tuple[str, str]] | None = None) -> list[PairTest]:
     """The given pairs (default: every pair, in the groups' order) as one table: Holm's

@@ -121,6 +121,12 @@ def teacher_share(asks: Iterable[Ask], teacher: str) -> Share:
     return Share(sum(a.teacher == teacher for a in asks), len(asks))
 
 
+def land_share(asks: Iterable[Ask], part_of: Callable[[np.ndarray], str]) -> Share:
+    """The share of the asks about a goal on land, where no part of the lake is."""
+    asks = list(asks)
+    return Share(sum(part_of(a.goal) == "land" for a in asks), len(asks))
+
+
 Window = tuple[int, dict[str, float]]
 """A window of movements (its first movement) and the share of each name in it."""
 

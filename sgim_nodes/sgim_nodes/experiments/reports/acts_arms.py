@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from sgim_nodes.analysis import figures
+from sgim_nodes.analysis import figures, strategy_choices
 from sgim_nodes.analysis.report import StudyNumbers, num, pval, table
 from sgim_nodes.analysis.statistics import PairTest, compare_groups
 from sgim_nodes.analysis.strategy_choices import (
@@ -145,15 +145,15 @@ def arms_table(arms: list[Arm], numbers: StudyNumbers, tests: dict[str, PairTest
 
 
 def land_share(runs: Sequence[RunData], last: int) -> Share:
-    part_of = acts_choices._part_of()
-    asks = [a for r in runs for a in acts_choices.last_asks(r, last)]
-    return Share(sum(part_of(a.goal) == "land" for a in asks), len(asks))
+    """The requests of the runs' last movements about a goal on land, pooled."""
+    return strategy_choices.land_share(
+        (a for r in runs for a in acts_choices.last_asks(r, last)), acts_choices.part_of_outcome())
 
 
 def shares_over_time(arm: Arm, window: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per window of movements: its middle, the expert share and rough's share, pooled over
     the arm's runs (NaN where no request counts)."""
-    part_of = acts_choices._part_of()
+    part_of = acts_choices.part_of_outcome()
     movements = max((r.total_movements for r in arm.runs), default=0)
     starts = np.arange(0, movements, window)
     by_window: list[list[Ask]] = [[] for _ in starts]

@@ -27,6 +27,7 @@ from sgim_nodes.analysis.strategy_choices import (
     counts_per_window,
     expert_share,
     in_window,
+    land_share,
     mean_counts,
     mean_shares,
     part_experts,
@@ -68,7 +69,8 @@ def percent(value: float | None) -> str:
     return "n/a" if value is None else f"{100 * value:.1f} %"
 
 
-def _part_of() -> Callable[[np.ndarray], str]:
+def part_of_outcome() -> Callable[[np.ndarray], str]:
+    """The part of the lake (or 'land') an outcome lies in (sim_bridge.lake)."""
     from sim_bridge.lake import Lake
 
     return Lake().part_of_outcome
@@ -133,7 +135,7 @@ def regions_table(runs: Sequence[RunData], last: int) -> str:
     teacher asked, pooled over the runs, beside the precise expert of each part."""
     from sim_bridge.lake import PARTS
 
-    part_of = _part_of()
+    part_of = part_of_outcome()
     counts = sum((asks_by_part(last_asks(r, last), part_of) for r in runs),
                  start=asks_by_part([], part_of))
     teachers = [s.name for s in FISHING_EXPERTS]
@@ -156,14 +158,14 @@ def regions_table(runs: Sequence[RunData], last: int) -> str:
 def modes_table(runs: Sequence[RunData], last: int) -> str:
     """The requests of the last movements by how their (strategy, goal) was chosen: what the
     learner's interest chose, apart from mode 2's uniform draws of strategy and goal."""
-    part_of = _part_of()
+    part_of = part_of_outcome()
     groups: dict[str, list[Ask]] = {}
     for run in runs:
         for name, asks in by_mode(last_asks(run, last)).items():
             groups.setdefault(name, []).extend(asks)
     rows = []
     for name, asks in groups.items():
-        land = Share(sum(part_of(a.goal) == "land" for a in asks), len(asks))
+        land = land_share(asks, part_of)
         expert = expert_share(asks, FISHING_EXPERTS, part_of)
         rough = teacher_share(asks, ROUGH)
         rows.append([name, str(len(asks)), percent(land.value),
@@ -192,7 +194,7 @@ class ChoiceShares:
 
 
 def choice_shares(runs: Sequence[RunData], last: int) -> ChoiceShares:
-    part_of = _part_of()
+    part_of = part_of_outcome()
     asks = [last_asks(r, last) for r in runs]
     return ChoiceShares([r.seed for r in runs],
                         [expert_share(a, FISHING_EXPERTS, part_of) for a in asks],

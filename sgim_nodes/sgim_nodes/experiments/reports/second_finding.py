@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from sgim_nodes.analysis.report import StudyNumbers, num, pval, table
-from sgim_nodes.analysis.statistics import PairTest
+from sgim_nodes.analysis.statistics import PairTest, find_test
 from sgim_nodes.core.learner_registry import DEMO_ONLY, SGIM_D
 from sgim_nodes.experiments.reports.acts_choices import Verdict
 
@@ -27,10 +27,6 @@ GROUP_NAMES = {"all": "all goals", "far": "the goals farther than 0.1 from every
 def difference(test: PairTest, a: str) -> float:
     """mean(a) - mean(the other) of a two-sided test, whichever side `a` is on."""
     return test.difference.estimate if test.a == a else -test.difference.estimate
-
-
-def _find(tests: list[PairTest], a: str, b: str) -> PairTest | None:
-    return next((t for t in tests if {t.a, t.b} == {a, b}), None)
 
 
 def _said(test: PairTest, a: str) -> str:
@@ -92,8 +88,8 @@ def new_seed_differences(groups: Any) -> dict[str, float | None]:
 def block(numbers: StudyNumbers, groups: Any) -> str:
     """The page's block (`groups`: study.GoalGroups): each pinned prediction, what the runs
     gave, held or failed."""
-    overall = _find(numbers.tests, SGIM_D, DEMO_ONLY)
-    by_group = {g: _find(groups.tests, f"{SGIM_D} ({g})", f"{DEMO_ONLY} ({g})")
+    overall = find_test(numbers.tests, SGIM_D, DEMO_ONLY)
+    by_group = {g: find_test(groups.tests, f"{SGIM_D} ({g})", f"{DEMO_ONLY} ({g})")
                 for g in ("far", "near", "pond")}
     judged = judge(overall, by_group, new_seed_differences(groups))
     n = {learner: len(groups.seeds.get(learner, [])) for learner in (SGIM_D, DEMO_ONLY)}

@@ -21,7 +21,13 @@ from sgim_nodes.analysis.report import (
     study_numbers,
     table,
 )
-from sgim_nodes.analysis.statistics import ALPHA, PairTest, compare_groups, demonstration_times
+from sgim_nodes.analysis.statistics import (
+    ALPHA,
+    PairTest,
+    compare_groups,
+    demonstration_times,
+    find_test,
+)
 from sgim_nodes.analysis.study import RunData, Study
 from sgim_nodes.core.learner_registry import DEMO_ONLY, RANDOM, SAGGRIAC, SGIM_D, display_name
 from sgim_nodes.experiments.pinned import Experiment
@@ -137,20 +143,13 @@ def goal_groups(study: Study) -> GoalGroups:
     return GoalGroups(groups, seeds, subsets, tests, text)
 
 
-def _test(numbers: StudyNumbers, a: str, b: str) -> PairTest | None:
-    for t in numbers.tests:
-        if {t.a, t.b} == {a, b}:
-            return t
-    return None
-
-
 def _mean(numbers: StudyNumbers, learner: str) -> float:
     return numbers.finals[learner].interval.mean
 
 
 def _verdict(numbers: StudyNumbers, a: str, b: str) -> str:
     """'a ends closer than b' checked: the means, the corrected p-values and the verdict."""
-    t = _test(numbers, a, b)
+    t = find_test(numbers.tests, a, b)
     if t is None:
         return f"{display_name(a)} or {display_name(b)} is missing"
     ma, mb = _mean(numbers, a), _mean(numbers, b)
