@@ -10,6 +10,7 @@ import os
 import platform
 import re
 import subprocess
+from collections import Counter
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
@@ -60,6 +61,15 @@ def machine() -> str:
         pass
     return (f"{cpu_model()}, {os.cpu_count()} cores{memory}, {platform.system()} "
             f"{platform.release()}")
+
+
+def made_on(machines: Iterable[str | None]) -> str:
+    """The machines some runs were made on (one per run, None when not recorded), with how
+    many runs each when they differ."""
+    counted = Counter(machine or "a machine not recorded" for machine in machines)
+    if len(counted) == 1:
+        return next(iter(counted))
+    return "; ".join(f"{name} ({n} runs)" for name, n in counted.most_common())
 
 
 @dataclass(frozen=True)

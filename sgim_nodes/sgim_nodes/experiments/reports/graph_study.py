@@ -3,13 +3,13 @@ run the experiment's file makes with today's learner."""
 
 from __future__ import annotations
 
-from collections import Counter
 from datetime import datetime
 from pathlib import Path
 
 from sgim_nodes.analysis.pooling import check_alike
 from sgim_nodes.analysis.study import Study, group_runs, load_study
 from sgim_nodes.experiments.pinned import Experiment
+from sgim_nodes.provenance.record import made_on
 
 
 class NotPinned(RuntimeError):
@@ -77,14 +77,6 @@ def run_time_note(study: Study) -> str:
     return (f"{len(study.runs)} runs through the graph, {sum(durations) / 3600:.1f} h of run "
             "time in all" + (f", {span / 3600:.1f} h from first start to last end" if span
                              else "")
-            + f", made on {machines_of(study.runs)}"
+            + f", made on {made_on(r.metadata.get('machine') for r in study.runs)}"
             + (f"; {shipped} read from the run tables of experiments/shipped/" if shipped
                else ""))
-
-
-def machines_of(runs) -> str:
-    """The machines the runs were made on, with how many each, from their metadata."""
-    counted = Counter(str(r.metadata.get("machine") or "a machine not recorded") for r in runs)
-    if len(counted) == 1:
-        return next(iter(counted))
-    return "; ".join(f"{name} ({n} runs)" for name, n in counted.most_common())

@@ -11,6 +11,7 @@ from sgim_nodes.core.learner_registry import colour as learner_colour
 from sgim_nodes.experiments import runner_jobs, shipped
 from sgim_nodes.experiments.pinned import Experiment
 from sgim_nodes.experiments.reports import Report
+from sgim_nodes.provenance.record import made_on
 
 COMPARISONS = ((RANDOM_GOALS, RANDOM), (SAGGRIAC, RANDOM), (SAGGRIAC, RANDOM_GOALS),
                (SGIM_D, SAGGRIAC))
@@ -174,7 +175,6 @@ def make(experiment: Experiment, runs_dir: Path, figures_dir: Path) -> Report:
     report.add(page, "same-memory", same_memory(results))
     report.add(page, "probes", probes(results))
     seconds = sum(r["seconds"] for r in results)
-    machines = sorted({str(r.get("machine") or "a machine not recorded") for r in results})
     report.notes.append(f"{len(results)} runs, {seconds / 3600:.1f} h of run time in all, "
-                        f"made on {'; '.join(machines)}")
+                        f"made on {made_on(r.get('machine') for r in results)}")
     return report
