@@ -1,13 +1,13 @@
 """One run as one compressed file of columns: what the pages need, without its bag.
 
-Why: a run's bag is tens of megabytes and takes minutes of compute to make again, but the
-pages only read a few columns of it (study.RunData). A run table holds exactly those columns,
-its metadata and a stamp saying which behaviour made it (experiments/shipped.py), so that a
+Why: a run's bag is large and costs a run's compute to make again, but the pages only
+read a few columns of it (study.RunData). A run table holds exactly those columns, its
+metadata and a stamp saying which behaviour made it (experiments/shipped.py), so that a
 page can be made again, byte for byte, from the tables the repository ships.
 
-Of the region maps (one per change of the tree: thousands), a table keeps the tree at each
-evaluation (the map ``RunData.region_map_at`` gives for it) and the last: the region-tree
-figures show the tree at evaluation counts, and those maps are a third of a run's bytes.
+Of the region maps (one per change of the tree), a table keeps the tree at each evaluation
+(the map ``RunData.region_map_at`` gives for it) and the last: the region-tree figures show
+the tree at evaluation counts, and the other maps are a large share of a run's bytes.
 
 The file is a NumPy ``.npz`` (a zip of ``.npy`` arrays, read by ``numpy.load``): every column
 under its RunData name, plus ``metadata`` and ``stamp`` as JSON text and ``notes`` (what the

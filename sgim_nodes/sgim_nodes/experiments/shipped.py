@@ -1,9 +1,9 @@
 """The runs the repository ships: one run table per graph run (analysis/run_table.py), kept in
 experiments/shipped/ and valid while today's code makes the same run.
 
-Why: the pages' runs take hours of compute and live in a runs folder no clone has. A run
-table is the part of a run the pages read (a few hundred kilobytes, no bag), so a fresh clone
-makes every page from the shipped tables in seconds, and runs made in one place (or one
+Why: the pages' runs cost much compute and live in a runs folder no clone has. A run
+table is the part of a run the pages read (no bag), so a fresh clone makes every page from
+the shipped tables without making a run, and runs made in one place (or one
 session) are never made again while the code behaves the same.
 
 When is a shipped run today's run? Each table is stamped with its run's behaviour
