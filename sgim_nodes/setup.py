@@ -28,6 +28,7 @@ ROS_SCRIPTS = [
     "evaluator = sgim_nodes.nodes.evaluator:main",
     "recorder = sgim_nodes.nodes.recorder:main",
     "markers = sgim_nodes.nodes.markers:main",
+    "composed = sgim_nodes.nodes.composed:main",
     "replay = sgim_nodes.bag.replay:main",
     "rebuild = sgim_nodes.bag.rebuild:main",
     "repair = sgim_nodes.bag.repair:main",

@@ -24,14 +24,11 @@ from typing import Any
 import rclpy
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
-from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import Executor
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.subscription import Subscription
 from rclpy.task import Future
-
-from sgim_ros.command_line import check_command_line, read_parameter_file, ros_arguments
-from sgim_ros.params import ParameterError
 
 # The launcher passes the read end of a pipe whose write end only it holds: end of file on it
 # means the launcher is gone, whatever killed it (SIGKILL included).
@@ -69,101 +66,30 @@ class AsyncNode(Node):
 
 
 async def first_of(node: Node, future: Future, timeout: float) -> bool:
-    """Await `future` for at most `timeout` seconds; True if it completed."""
-    either = Future(executor=node.executor)
+    """Await `future` for at most `timeout` seconds; True if it completed.
 
-    def finish(value: bool) -> None:
-        if not either.done():
-            either.set_result(value)
+    On the timeout the future is cancelled, which ends the await. The future itself is
+    awaited, not a second one completed from its done callback: rclpy's EventsExecutor
+    resumes a task when what it awaits completes in the same round of events, and such a
+    chain of two left the awaiting task for the next event (up to a spin slice later)."""
+    def expire() -> None:
+        if not future.done():
+            future.cancel()
 
-    future.add_done_callback(lambda _: finish(True))
-    timer = node.create_timer(timeout, lambda: finish(False))
+    timer = node.create_timer(timeout, expire)
     try:
-        return await either
+        await future
+        return future.done()
     finally:
         node.destroy_timer(timer)
 
 
-EXECUTOR_VARIABLE = "SGIM_EXECUTOR"
-EXECUTORS = ("single", "events")
-
-
-def make_executor(node: Node, kind: str) -> Executor:
-    """The executor a node spins on: "single" (rclpy's SingleThreadedExecutor) or "events"
-    (rclpy's EventsExecutor), for a node whose callbacks never await (a simulator, a recorder,
-    a subscriber).
-
-    Why two: the SingleThreadedExecutor rebuilds its wait set in Python at every wake-up;
-    measured on these machines (2 cores, loaded), a node that only receives Movements spent
-    625 us of CPU per message on it against 270 us on the EventsExecutor. But the
-    EventsExecutor of the Jazzy wheel (rclpy 7.1.6) cannot run a node that awaits: an
-    awaiting service callback ends in a TypeError in send_response (rclpy issue 1473, fixed
-    after that release), and a task that awaits a future is resumed again and again until
-    the future is done, a busy loop that took a whole core. So an AsyncNode always gets the
-    SingleThreadedExecutor. ``SGIM_EXECUTOR=single`` in the environment puts every node on
-    it (to compare, or should the EventsExecutor misbehave).
-    """
-    if kind not in EXECUTORS:
-        raise ValueError(f"unknown executor {kind!r}: one of {', '.join(EXECUTORS)}")
-    if (kind == "single" or isinstance(node, AsyncNode)
-            or os.environ.get(EXECUTOR_VARIABLE, "") == "single"):
-        return SingleThreadedExecutor()
-    from rclpy.experimental import EventsExecutor
-
-    return EventsExecutor()
-
-
-def run_node(factory: Callable[[], Node], args: list[str] | None = None,
+def run_node(factory: Callable[..., Node], args: list[str] | None = None,
              refusals: tuple[type[Exception], ...] = (), executor: str = "single") -> int:
-    """Create and spin one node; a bad parameter ends it with exit code 2 and a clear message.
+    """Create and spin one node in its own process (sgim_ros/host.py, NodeEntry)."""
+    from sgim_ros.host import NodeEntry
 
-    Ctrl-C and external shutdown end it cleanly; a node may also end the spin by itself by
-    setting `node.finished = True` (with `node.exit_code`). `refusals`: more exceptions that
-    mean "cannot start with this configuration". `executor`: see `make_executor`.
-    """
-    argv = sys.argv if args is None else args
-    try:
-        for path in ros_arguments(argv)[1]:
-            read_parameter_file(path)  # rcl reads a file holding a plain string as "nothing"
-        rclpy.init(args=args)
-    except ParameterError as error:
-        print(f"[{factory.__name__}] {error}", file=sys.stderr, flush=True)
-        return 2
-    except Exception as error:  # rcl's own parse errors (RCLError): one line, not a traceback
-        print(f"[{factory.__name__}] {str(error).split(', at /')[0]}", file=sys.stderr,
-              flush=True)
-        return 2
-    if not follow_launcher():
-        print(f"[{factory.__name__}] its launcher is gone: not starting", file=sys.stderr,
-              flush=True)
-        rclpy.try_shutdown()
-        return 1
-    node = None
-    try:
-        node = factory()
-        check_command_line(node, argv)
-    except (ParameterError, ValueError, FileNotFoundError, *refusals) as error:
-        print(f"[{factory.__name__}] {error}", file=sys.stderr, flush=True)
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-        return 2
-    spinner = make_executor(node, executor)
-    spinner.add_node(node)
-    profile = Profile(node.get_name())
-    try:
-        with profile:
-            while rclpy.ok() and not getattr(node, "finished", False):
-                spinner.spin_once(timeout_sec=0.1)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        profile.write()
-        tear_down(factory.__name__, spinner, node)
-    code = int(getattr(node, "exit_code", 0))
-    if os.environ.get(LAUNCHER_FD):
-        end_now(code)
-    return code
+    return NodeEntry(factory, refusals, executor).main(args)
 
 
 def end_now(code: int) -> None:
@@ -232,18 +158,19 @@ class Profile:
                   flush=True)
 
 
-def tear_down(name: str, executor: Executor, node: Node) -> None:
-    """End the node whatever signals still come: its own end (the recorder closes its bag in
-    destroy_node) must not be cut by a second Ctrl-C or by a KeyboardInterrupt that rclpy's
-    signal handler let through late, and rclpy's own teardown racing the shutdown that the
-    signal started is no failure of the node: it is said in one line, and the node's exit code
-    stands."""
+def tear_down(name: str, executor: Executor, nodes: list[Node]) -> None:
+    """End the nodes, in this order, whatever signals still come: their own end (the recorder
+    closes its bag in destroy_node) must not be cut by a second Ctrl-C or by a
+    KeyboardInterrupt that rclpy's signal handler let through late, and rclpy's own teardown
+    racing the shutdown that the signal started is no failure of a node: it is said in one
+    line, and the exit code stands."""
     for sig in (signal.SIGINT, signal.SIGTERM):
         with contextlib.suppress(ValueError, OSError):  # ValueError: not the main thread
             signal.signal(sig, signal.SIG_IGN)
-    for what, step in (("executor shutdown", executor.shutdown),
-                       ("node destruction", node.destroy_node),
-                       ("rclpy shutdown", rclpy.try_shutdown)):
+    steps = [("executor shutdown", executor.shutdown),
+             *((f"destruction of {node.get_name()}", node.destroy_node) for node in nodes),
+             ("rclpy shutdown", rclpy.try_shutdown)]
+    for what, step in steps:
         try:
             step()
         except Exception as error:

@@ -172,7 +172,12 @@ class Endpoint:
                                             topic_qos(actual, keep_all=self.keep_all),
                                             **options)
         if self.kind == "serves":
-            return node.create_service(kind, actual, callback, **options)
+            from sgim_ros.executors import is_async, serve_async
+
+            service = node.create_service(kind, actual, callback, **options)
+            if is_async(callback):  # rclpy 7.1.6's EventsExecutor cannot send its answer
+                serve_async(node, service)
+            return service
         if self.kind == "calls":
             return node.create_client(kind, actual, **options)
         from rclpy.action import ActionClient, ActionServer

@@ -15,13 +15,14 @@ Parameters: seed, noise, time_step (see PARAMS).
 from __future__ import annotations
 
 import sys
+from typing import Any
 
 import numpy as np
 from rclpy.node import Node
 
 from sgim_msgs.msg import Movement
 from sgim_msgs.srv import ExecuteAction
-from sgim_ros.entry import run_node
+from sgim_ros.host import NodeEntry
 from sgim_ros.interfaces import declared, publishes, serves
 from sgim_ros.params import Bounds, Param, declare, non_negative, seed_range
 from sgim_ros.record_key import REEXECUTION_LOG, from_environment, movement_signature
@@ -47,8 +48,8 @@ INTERFACES = declared(MOVEMENTS, EXECUTE)
 
 
 class SimBridgeNode(Node):
-    def __init__(self) -> None:
-        super().__init__("sim_bridge")
+    def __init__(self, **node_options: Any) -> None:
+        super().__init__("sim_bridge", **node_options)
         p = declare(self, PARAMS)
         self.world = FishingWorld(seed=p["seed"], noise=p["noise"], time_step=p["time_step"])
         # Movement k gets the k-th noise of the seed's stream, even after a restart, a resume
@@ -121,8 +122,12 @@ class SimBridgeNode(Node):
         super().destroy_node()
 
 
+ENTRY = NodeEntry(SimBridgeNode, executor="events")
+"""How this node starts, alone or beside others (sgim_ros/host.py)."""
+
+
 def main(args: list[str] | None = None) -> int:
-    return run_node(SimBridgeNode, args, executor="events")
+    return ENTRY.main(args)
 
 
 if __name__ == "__main__":

@@ -31,6 +31,7 @@ outcome_size, outcome_noise, movements.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from rclpy.node import Node
@@ -42,7 +43,8 @@ from sgim_nodes.core.experts import FISHING_EXPERTS, ExpertAnswer, ExpertSpec, b
 from sgim_nodes.core.random_streams import world_seed
 from sgim_nodes.core.strategies import check_teacher_name
 from sgim_nodes.core.teaching import GOAL_ONLY, MEANS_AND_GOAL, MEANS_ONLY
-from sgim_nodes.nodes.ros_glue import COMMON_PARAMS, floats, run_node, vec, world_scale
+from sgim_nodes.nodes.ros_glue import COMMON_PARAMS, floats, vec, world_scale
+from sgim_ros.host import NodeEntry
 from sgim_ros.interfaces import declared, publishes, serves, subscribes
 from sgim_ros.params import Param, ParameterError, declare, non_negative
 from sgim_ros.ready import serve_ready
@@ -95,8 +97,8 @@ INTERFACES = declared(DEMONSTRATIONS, REQUESTS, STATUS, READY)
 
 
 class ExpertNode(Node):
-    def __init__(self) -> None:
-        super().__init__("expert")
+    def __init__(self, **node_options: Any) -> None:
+        super().__init__("expert", **node_options)
         p = declare(self, PARAMS)
         name = p["name"] or self.get_namespace().strip("/").rsplit("/", 1)[-1]
         try:
@@ -182,8 +184,12 @@ class ExpertNode(Node):
         super().destroy_node()
 
 
+ENTRY = NodeEntry(ExpertNode, executor="events")
+"""How this node starts, alone or beside others (sgim_ros/host.py)."""
+
+
 def main(args: list[str] | None = None) -> int:
-    return run_node(ExpertNode, args, executor="events")
+    return ENTRY.main(args)
 
 
 if __name__ == "__main__":

@@ -41,6 +41,8 @@ tolerance_noise, noise (of the teacher's own world), teaching_set, movements, te
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from builtin_interfaces.msg import Time
 from rclpy.node import Node
@@ -69,12 +71,12 @@ from sgim_nodes.nodes.ros_glue import (
     declare_learner,
     floats,
     learner_node_params,
-    run_node,
     social_config,
     social_params,
     vec,
     world_scale,
 )
+from sgim_ros.host import NodeEntry
 from sgim_ros.interfaces import declared, publishes, serves, subscribes
 from sgim_ros.params import Param, ParameterError, non_negative
 from sgim_ros.ready import serve_ready
@@ -120,8 +122,8 @@ INTERFACES = declared(CHECKS, DEMONSTRATIONS, TAKEN, STATUS, REQUESTS, READY, MO
 
 
 class TeacherNode(Node):
-    def __init__(self) -> None:
-        super().__init__("teacher")
+    def __init__(self, **node_options: Any) -> None:
+        super().__init__("teacher", **node_options)
         p, config = declare_learner(self, PARAMS)
         ts = load_checked(p["teaching_set"], p["action_size"], p["outcome_size"])
         tolerance = p["tolerance_noise"] * p["outcome_noise"]
@@ -305,8 +307,12 @@ class TeacherNode(Node):
         super().destroy_node()
 
 
+ENTRY = NodeEntry(TeacherNode, executor="events")
+"""How this node starts, alone or beside others (sgim_ros/host.py)."""
+
+
 def main(args: list[str] | None = None) -> int:
-    return run_node(TeacherNode, args, executor="events")
+    return ENTRY.main(args)
 
 
 if __name__ == "__main__":

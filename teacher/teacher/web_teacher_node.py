@@ -55,7 +55,7 @@ from sgim_nodes.nodes.picture_feed import (
     reach_tolerance,
 )
 from sgim_nodes.view.picture import LivePicture
-from sgim_ros.entry import run_node
+from sgim_ros.host import NodeEntry
 from sgim_ros.interfaces import calls, declared, publishes, serves, subscribes
 from sgim_ros.params import Param, ParameterError, declare, non_negative, positive
 from sgim_ros.ready import serve_ready
@@ -433,8 +433,12 @@ class WebTeacherNode(Node, Api):
         super().destroy_node()
 
 
+ENTRY = NodeEntry(WebTeacherNode)
+"""How this node starts, alone or beside others (sgim_ros/host.py)."""
+
+
 def main(args: list[str] | None = None) -> int:
-    return run_node(WebTeacherNode, args)
+    return ENTRY.main(args)
 
 
 if __name__ == "__main__":

@@ -78,6 +78,7 @@ class Waits:
         self._waiting: list[tuple[Callable[[], bool], Future]] = []
 
     def check(self) -> None:
+        self._waiting = [(c, f) for c, f in self._waiting if not f.cancelled()]  # timed out
         for condition, future in self._waiting:
             if not future.done() and condition():
                 future.set_result(True)

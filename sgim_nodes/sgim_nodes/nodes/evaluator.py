@@ -19,6 +19,7 @@ movements, noise (of the evaluator's world; default the world's).
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 from rclpy.node import Node
@@ -36,10 +37,10 @@ from sgim_nodes.nodes.ros_glue import (
     declare_learner,
     floats,
     learner_node_params,
-    run_node,
     vec,
     world_scale,
 )
+from sgim_ros.host import NodeEntry
 from sgim_ros.interfaces import declared, publishes, serves, subscribes
 from sgim_ros.params import Param, non_negative
 from sgim_ros.ready import serve_ready
@@ -61,8 +62,8 @@ INTERFACES = declared(EVALUATIONS, READY, TAKEN, STATUS, MOVEMENTS)
 
 
 class EvaluatorNode(Node):
-    def __init__(self) -> None:
-        super().__init__("evaluator")
+    def __init__(self, **node_options: Any) -> None:
+        super().__init__("evaluator", **node_options)
         values, config = declare_learner(self, PARAMS)
         self.every = values["eval_every"]
         self.action_size = values["action_size"]
@@ -157,8 +158,12 @@ class EvaluatorNode(Node):
         super().destroy_node()
 
 
+ENTRY = NodeEntry(EvaluatorNode, executor="events")
+"""How this node starts, alone or beside others (sgim_ros/host.py)."""
+
+
 def main(args: list[str] | None = None) -> int:
-    return run_node(EvaluatorNode, args, executor="events")
+    return ENTRY.main(args)
 
 
 if __name__ == "__main__":

@@ -26,6 +26,8 @@ history of its region (core/strategy_regions.py).
 
 from __future__ import annotations
 
+from typing import Any
+
 from rclpy.task import Future
 
 from sgim_msgs.msg import Competence, Goal
@@ -46,12 +48,12 @@ from sgim_nodes.nodes.ros_glue import (
     declare_learner,
     floats,
     learner_node_params,
-    run_node,
     teacher_names,
     vec,
     world_scale,
 )
 from sgim_ros.entry import first_of
+from sgim_ros.host import NodeEntry
 from sgim_ros.interfaces import declared, publishes, serves, subscribes
 from sgim_ros.params import Param, ParameterError, positive
 from sgim_ros.ready import serve_ready
@@ -86,8 +88,8 @@ INTERFACES = declared(GOALS, COMPETENCES, READY, CHOOSE)
 
 
 class GoalGenerator(AsyncNode):
-    def __init__(self) -> None:
-        super().__init__("goal_generator")
+    def __init__(self, **node_options: Any) -> None:
+        super().__init__("goal_generator", **node_options)
         values, c = declare_learner(self, PARAMS)
         self.timeout = values["map_timeout"]
         self.outcome_size = values["outcome_size"]
@@ -170,8 +172,12 @@ class GoalGenerator(AsyncNode):
         return response
 
 
+ENTRY = NodeEntry(GoalGenerator)
+"""How this node starts, alone or beside others (sgim_ros/host.py)."""
+
+
 def main(args: list[str] | None = None) -> int:
-    return run_node(GoalGenerator, args)
+    return ENTRY.main(args)
 
 
 if __name__ == "__main__":

@@ -19,6 +19,8 @@ service_timeout.
 
 from __future__ import annotations
 
+from typing import Any
+
 from sgim_msgs.action import Imitate
 from sgim_msgs.msg import Movement
 from sgim_msgs.srv import ExecuteAction
@@ -35,10 +37,10 @@ from sgim_nodes.nodes.ros_glue import (
     declare_learner,
     floats,
     learner_node_params,
-    run_node,
     vec,
 )
 from sgim_nodes.nodes.sim_client import EXECUTE, SIM_CLIENT_PARAMS, SimClient
+from sgim_ros.host import NodeEntry
 from sgim_ros.interfaces import action_server, declared, serves, subscribes
 from sgim_ros.ready import serve_ready
 
@@ -49,8 +51,8 @@ INTERFACES = declared(MOVEMENTS, READY, IMITATE, EXECUTE)
 
 
 class ImitationNode(AsyncNode):
-    def __init__(self) -> None:
-        super().__init__("imitation")
+    def __init__(self, **node_options: Any) -> None:
+        super().__init__("imitation", **node_options)
         values, self.config = declare_learner(self, PARAMS)
         self.action_size, self.outcome_size = values["action_size"], values["outcome_size"]
         self.rng = component_rng(values["seed"], "imitation")
@@ -112,8 +114,12 @@ class ImitationNode(AsyncNode):
         return result
 
 
+ENTRY = NodeEntry(ImitationNode)
+"""How this node starts, alone or beside others (sgim_ros/host.py)."""
+
+
 def main(args: list[str] | None = None) -> int:
-    return run_node(ImitationNode, args)
+    return ENTRY.main(args)
 
 
 if __name__ == "__main__":

@@ -14,6 +14,8 @@ Parameters: the common ones and the region-tree ones of LearnerConfig (docs/refe
 
 from __future__ import annotations
 
+from typing import Any
+
 from rclpy.node import Node
 
 from sgim_msgs.msg import Competence
@@ -26,10 +28,10 @@ from sgim_nodes.nodes.ros_glue import (
     declare_learner,
     learner_node_params,
     region_map_msg,
-    run_node,
     vec,
     world_scale,
 )
+from sgim_ros.host import NodeEntry
 from sgim_ros.interfaces import declared, publishes, subscribes
 
 PARAMS = learner_node_params()
@@ -39,8 +41,8 @@ INTERFACES = declared(REGION_MAP, COMPETENCES)
 
 
 class InterestComputer(Node):
-    def __init__(self) -> None:
-        super().__init__("interest_computer")
+    def __init__(self, **node_options: Any) -> None:
+        super().__init__("interest_computer", **node_options)
         values, c = declare_learner(self, PARAMS)
         self.outcome_size = values["outcome_size"]
         tree, folded = region_tree_for(c, world_scale(values)), 0
@@ -65,8 +67,12 @@ class InterestComputer(Node):
                                          self.get_clock().now().to_msg()))
 
 
+ENTRY = NodeEntry(InterestComputer, executor="events")
+"""How this node starts, alone or beside others (sgim_ros/host.py)."""
+
+
 def main(args: list[str] | None = None) -> int:
-    return run_node(InterestComputer, args, executor="events")
+    return ENTRY.main(args)
 
 
 if __name__ == "__main__":

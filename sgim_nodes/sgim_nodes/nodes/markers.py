@@ -16,6 +16,8 @@ Parameters: rate, full_every, tolerance_noise, outcome_noise, teaching_set.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from rclpy.node import Node
 from visualization_msgs.msg import MarkerArray
@@ -29,7 +31,7 @@ from sgim_nodes.nodes.picture_feed import (
 )
 from sgim_nodes.view import markers
 from sgim_nodes.view.picture import LivePicture
-from sgim_ros.entry import run_node
+from sgim_ros.host import NodeEntry
 from sgim_ros.interfaces import declared, publishes
 from sgim_ros.params import Param, declare, positive
 from sim_bridge.data_files import load_teaching_set
@@ -52,8 +54,8 @@ INTERFACES = declared(*LAYERS, PICTURE_INTERFACES)
 
 
 class MarkersNode(Node):
-    def __init__(self) -> None:
-        super().__init__("markers")
+    def __init__(self, **node_options: Any) -> None:
+        super().__init__("markers", **node_options)
         p = declare(self, PARAMS)
         ts = load_teaching_set(p["teaching_set"] or None)
         teacher = Teacher(ts.actions, ts.outcomes, np.random.default_rng(0),
@@ -98,8 +100,12 @@ class MarkersNode(Node):
         return self._sent["landings"] if self._batch == 0 and self._last_full > -1 else -1
 
 
+ENTRY = NodeEntry(MarkersNode, executor="events")
+"""How this node starts, alone or beside others (sgim_ros/host.py)."""
+
+
 def main(args: list[str] | None = None) -> int:
-    return run_node(MarkersNode, args, executor="events")
+    return ENTRY.main(args)
 
 
 if __name__ == "__main__":

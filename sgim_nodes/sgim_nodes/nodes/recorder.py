@@ -35,6 +35,7 @@ import os
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import yaml
 from rclpy.node import Node
@@ -46,7 +47,7 @@ from sgim_nodes.bag.run_folder import QUARANTINE_SUFFIX
 from sgim_nodes.bag.types import RECORDED_TOPICS, TOPICS
 from sgim_nodes.bag.validation import RunValidator
 from sgim_nodes.bag.writer import STORAGES, BagWriteError, BagWriter
-from sgim_ros.entry import run_node
+from sgim_ros.host import NodeEntry
 from sgim_ros.interfaces import declared, serves, subscribes
 from sgim_ros.params import Param, at_least, declare, non_negative, one_of, positive
 from sgim_ros.ready import serve_ready
@@ -116,8 +117,8 @@ INTERFACES = declared(RECORDED, READY)
 
 
 class RecorderNode(Node):
-    def __init__(self) -> None:
-        super().__init__("recorder")
+    def __init__(self, **node_options: Any) -> None:
+        super().__init__("recorder", **node_options)
         p = declare(self, PARAMS)
         self.stop_on_finish = p["stop_on_finish"]
         self.finish_grace = p["finish_grace"]
@@ -306,14 +307,18 @@ def _usage() -> str:
     return "\n".join(lines)
 
 
+ENTRY = NodeEntry(RecorderNode, refusals=(BagWriteError, OSError),
+                  executor="events")
+"""How this node starts, alone or beside others (sgim_ros/host.py)."""
+
+
 def main(args: list[str] | None = None) -> int:
     argv = sys.argv[1:] if args is None else args
     if any(a in ("-h", "--help") for a in argv[: argv.index("--ros-args")
                                                 if "--ros-args" in argv else None]):
         print(_usage())
         return 0
-    return run_node(RecorderNode, args, refusals=(BagWriteError, OSError),
-                    executor="events")
+    return ENTRY.main(args)
 
 
 if __name__ == "__main__":

@@ -21,7 +21,7 @@ from sgim_nodes.core.learner_registry import OWN_NAMES, SGIM_ACTS, SGIM_D, is_le
 from sgim_nodes.core.region_snapshot import RegionSnapshot, RegionSummary
 from sgim_nodes.core.scale import WorldScale, unit_box
 from sgim_nodes.core.social_config import SocialConfig, declared, turn_names
-from sgim_ros.entry import AsyncNode, run_node  # noqa: F401 - the nodes' shared entry point
+from sgim_ros.entry import AsyncNode  # noqa: F401 - the nodes' base
 from sgim_ros.params import (
     Bounds,
     OneOf,

@@ -48,6 +48,7 @@ goals_per_job, timeouts.
 from __future__ import annotations
 
 import time
+from typing import Any
 
 from rclpy.action import ActionClient
 from rclpy.duration import Duration
@@ -82,13 +83,13 @@ from sgim_nodes.nodes.ros_glue import (
     AsyncNode,
     declare_learner,
     floats,
-    run_node,
     teacher_names,
     vec,
     world_scale,
 )
 from sgim_nodes.nodes.run_progress import RUN_STATUS, RunProgress
 from sgim_nodes.nodes.sim_client import EXECUTE, SimClient, SimulatorError
+from sgim_ros.host import NodeEntry
 from sgim_ros.interfaces import action_client, calls, declared, publishes, subscribes
 from sgim_ros.params import ParameterError
 
@@ -101,8 +102,8 @@ INTERFACES = declared(REGISTER, TAKEN, REACH, IMITATE, COMPETENCES, DEMONSTRATIO
 
 
 class SocialInteraction(AsyncNode):
-    def __init__(self) -> None:
-        super().__init__("social_interaction")
+    def __init__(self, **node_options: Any) -> None:
+        super().__init__("social_interaction", **node_options)
         values, self.config = declare_learner(self, PARAMS)
         self.p = values
         self.learner = values["learner"]
@@ -428,8 +429,12 @@ def shown_parts(demo) -> tuple:
             vec(demo.outcome) if len(demo.outcome) else None)
 
 
+ENTRY = NodeEntry(SocialInteraction)
+"""How this node starts, alone or beside others (sgim_ros/host.py)."""
+
+
 def main(args: list[str] | None = None) -> int:
-    return run_node(SocialInteraction, args)
+    return ENTRY.main(args)
 
 
 if __name__ == "__main__":
