@@ -32,13 +32,13 @@ sys.path[:0] = [str(REPO), str(REPO / "sgim_nodes")]
 
 from sgim_nodes.core.learner_registry import RANDOM  # noqa: E402
 from sgim_nodes.graph.domain import reserve_domain  # noqa: E402
-from sgim_nodes.graph.processes import run_node_pids  # noqa: E402
+from sgim_nodes.graph.processes import node_log, run_node_pids  # noqa: E402
 
 RUN = str(REPO / "ros_ws" / "run_experiment.sh")
 
 
 def movements_logged(run_dir: Path) -> bool:
-    log = run_dir / "logs" / "social_interaction.log"
+    log = node_log(run_dir / "logs", "social_interaction")
     return log.exists() and " movements (" in log.read_text(errors="replace")
 
 

@@ -31,6 +31,7 @@ import time
 from pathlib import Path
 
 from sgim_nodes.core.learner_registry import SGIM_D
+from sgim_nodes.graph.processes import node_log
 
 REPO = Path(__file__).resolve().parent.parent
 RUN = REPO / "ros_ws" / "run_experiment.sh"
@@ -62,7 +63,7 @@ def one_run(out: Path, name: str, movements: int, seed: int, page: bool) -> dict
     page_cpu = (after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime) - run_cpu
     if code != 0:
         raise SystemExit(f"run {name} failed (exit {code}); see {out / name}")
-    log = (out / name / "logs" / "social_interaction.log").read_text()
+    log = node_log(out / name / "logs", "social_interaction").read_text()
     count, seconds = FINISHED.search(log).groups()
     return {"name": name, "run_s": float(seconds), "wall_s": wall, "movements": int(count),
             "run_cpu": run_cpu, "page_cpu": max(0.0, page_cpu), "load": load, **stats}

@@ -45,6 +45,7 @@ import yaml
 from soak_checks import FORGED_OUTCOME, run_problems  # beside this script
 
 from sgim_nodes.core.learner_registry import SGIM_D
+from sgim_nodes.graph.processes import node_log
 
 REPO = Path(__file__).resolve().parents[1]
 RUN = str(REPO / "ros_ws" / "run_experiment.sh")
@@ -94,7 +95,7 @@ def node_pid(run_dir: Path, executable: str) -> int | None:
 def progress(run_dir: Path) -> int:
     """The latest movement count the arbiter logged (0 when none yet)."""
     best = 0
-    for log in run_dir.glob("logs/**/social_interaction.log"):
+    for log in {node_log(folder, "social_interaction") for folder in run_dir.glob("logs/**/")}:
         try:
             for found in re.findall(r"(\d+)/\d+ movements", log.read_text(errors="replace")):
                 best = max(best, int(found))

@@ -12,7 +12,8 @@ import time
 
 import pytest
 
-from sgim_nodes.graph.supervise import SafeStream, log_reason
+from sgim_nodes.graph.supervise import SafeStream
+from sgim_nodes.graph.supervisor import log_reason
 
 
 def test_messages_survive_a_closed_output_pipe_and_still_reach_the_run_log(tmp_path):
@@ -58,8 +59,9 @@ def test_a_resumed_runs_failure_names_the_log_of_its_own_segment(tmp_path):
 
     from sgim_nodes.graph.experiment_options import parse_args
     from sgim_nodes.graph.plan import plan_new, plan_resume
+    from sgim_nodes.graph.process_plan import process_plan
     from sgim_nodes.graph.run_folder import write_metadata
-    from sgim_nodes.graph.supervise import Supervisor
+    from sgim_nodes.graph.supervisor import Supervisor
     from tests.bag.samples import synthetic_run, write_bag
 
     plan = plan_new(parse_args(["random", "--movements", "60", "--runs-dir", str(tmp_path),
@@ -80,7 +82,8 @@ def test_a_resumed_runs_failure_names_the_log_of_its_own_segment(tmp_path):
     resumed.log_dir.mkdir()
     (resumed.log_dir / "evaluator.log").write_text(
         "[ERROR] [2.0] [evaluator]: no answer from execute_action\n")
-    supervisor = Supervisor(resumed.nodes, launch=None, log_dir=resumed.log_dir, timeout=1.0,
+    supervisor = Supervisor(process_plan(resumed.nodes, separate=True), launch=None,
+                            log_dir=resumed.log_dir, timeout=1.0,
                             progress=SimpleNamespace(count=45))
     message = supervisor.failure("evaluator", 1)
     assert message == ("node evaluator stopped (exit 1) at movement 45: no answer from "

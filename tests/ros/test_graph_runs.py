@@ -330,15 +330,29 @@ def test_where_reach_goal_jobs_end_changes_no_movement(ros_processes, ros_domain
                                             if c.goal_index}
 
 
-@pytest.mark.parametrize("learner", ["sgim-d", "saggriac", "random-goals", "demo-only",
-                                     "random"])
-def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner):
+# Each learner through the default processes (the message-only nodes share one), one also
+# with a process per node (--separate): both make the runner's movements.
+@pytest.mark.parametrize("learner, separate", [("sgim-d", False), ("saggriac", False),
+                                               ("random-goals", True), ("demo-only", False),
+                                               ("random", False)])
+def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner, separate):
     from sgim_msgs.msg import Movement, RunStatus
+    from sgim_nodes.graph.processes import node_log
 
     extra = ["--param", f"tolerance_noise={TOLERANCE[learner]}"] if learner in TOLERANCE else []
-    child = run_graph(ros_processes, ros_domain, tmp_path, learner, *extra, markers=True)
+    layout = ["--separate"] if separate else []
+    child = run_graph(ros_processes, ros_domain, tmp_path, learner, *extra, *layout,
+                      markers=True)
     later = runner_records_later(learner)
     run = finish(child, tmp_path, learner)
+    logs = tmp_path / learner / "logs"
+    if separate:  # every node its own process and log
+        assert not (logs / "light.log").exists()
+        assert not list(logs.glob("*.nodes"))
+    else:  # the arbiter and the recorder ended by themselves while their process went on
+        ends = (logs / "light.ends").read_text().splitlines()
+        assert set(ends[:2]) == {"social_interaction 0", "recorder 0"}, ends
+        assert node_log(logs, "recorder") == logs / "light.log"
 
     # Every movement recorded once, in order.
     assert [m.index for m in run.movements] == list(range(1, MOVEMENTS + 1))

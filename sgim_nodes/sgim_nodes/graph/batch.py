@@ -31,9 +31,9 @@ from pathlib import Path
 import yaml
 
 from sgim_nodes.core.learner_registry import compared_names
-from sgim_nodes.graph.description import RunOptions, parameters
+from sgim_nodes.graph.description import ARBITER, RunOptions, parameters
 from sgim_nodes.graph.overrides import parse_assignments
-from sgim_nodes.graph.processes import ProcessGroup
+from sgim_nodes.graph.processes import ProcessGroup, node_log
 from sgim_nodes.graph.run_folder import RunFolderError, RunLock
 from sgim_ros.command_line import BriefParser
 from sgim_ros.params import SEED_MAX, ParameterError
@@ -57,7 +57,7 @@ class Job:
         return self.folder.name
 
     def movements_done(self) -> int:
-        log = self.folder / "logs" / "social_interaction.log"
+        log = node_log(self.folder / "logs", ARBITER)
         try:
             tail = log.read_text(errors="replace")[-2000:]
         except OSError:

@@ -37,7 +37,7 @@ from typing import Any
 import yaml
 
 from sgim_nodes.graph import supervise
-from sgim_nodes.graph.description import ARBITER, RECORDER, NodeSpec
+from sgim_nodes.graph.description import ARBITER, NODES, RECORDER, NodeSpec
 from sgim_nodes.graph.domain import (
     DomainInUse,
     DomainReservation,
@@ -46,6 +46,13 @@ from sgim_nodes.graph.domain import (
 )
 from sgim_nodes.graph.experiment_options import REPO, default_timeout, parse_args
 from sgim_nodes.graph.plan import Plan, plan_new, plan_resume
+from sgim_nodes.graph.process_plan import (
+    DEFAULT_GROUPS,
+    ProcessSpec,
+    parse_groups,
+    process_plan,
+    unknown_in_groups,
+)
 from sgim_nodes.graph.processes import ProcessGroup
 from sgim_nodes.graph.run_folder import (
     METADATA,
@@ -55,27 +62,42 @@ from sgim_nodes.graph.run_folder import (
     write_metadata,
 )
 from sgim_nodes.graph.supervise import Interrupted, RunFailed, say
+from sgim_nodes.graph.supervisor import Supervisor, log_reason
 from sgim_ros import record_key
 from sgim_ros.params import ParameterError
 
 ROS2RUN = REPO / "ros_ws" / "ros2run.sh"
 
 
-def prefixes(items: Sequence[str], nodes: Sequence[NodeSpec]) -> dict[str, list[str]]:
-    names = {spec.name for spec in nodes}
+def prefixes(items: Sequence[str], names: Sequence[str]) -> dict[str, list[str]]:
+    """--prefix NAME=COMMAND options -> the command before each named node or process."""
     found = {}
     for item in items:
         name, sep, command = item.partition("=")
         if not sep or not command.strip():
             raise ParameterError(f"--prefix expects NODE=COMMAND, got {item!r}")
         if name not in names:
-            raise ParameterError(f"--prefix {item!r}: no node '{name}' in this run (its "
-                                 f"nodes: {', '.join(sorted(names))})")
+            raise ParameterError(f"--prefix {item!r}: no node or process '{name}' in this run "
+                                 f"(its nodes and processes: {', '.join(sorted(set(names)))})")
         try:
             found[name] = shlex.split(command)
         except ValueError as error:  # an unclosed quote
             raise ParameterError(f"--prefix {item!r}: {error}") from None
     return found
+
+
+def processes_of(args: argparse.Namespace, nodes: Sequence[NodeSpec]
+                 ) -> tuple[list[ProcessSpec], dict[str, list[str]]]:
+    """The run's processes (a node given its own --prefix runs alone) and their prefixes."""
+    groups = parse_groups(args.compose) if args.compose else None
+    unknown = unknown_in_groups(groups or {}, NODES)
+    if unknown:
+        raise ParameterError(f"--compose names no node {', '.join(unknown)} (the graph's "
+                             f"nodes: {', '.join(sorted(NODES))})")
+    names = [spec.name for spec in nodes] + list(groups or DEFAULT_GROUPS)
+    prefix = prefixes(args.prefix, names)
+    plan = process_plan(nodes, groups, args.separate, alone=prefix)
+    return plan, prefix
 
 
 def run(args: argparse.Namespace) -> int:
@@ -154,7 +176,7 @@ def refuse_full_disk(run_dir: Path) -> None:
 
 def launch(args: argparse.Namespace, plan: Plan, reservation: DomainReservation) -> int:
     try:
-        node_prefix = prefixes(args.prefix, plan.nodes)
+        processes, prefix = processes_of(args, plan.nodes)
     except ParameterError as error:
         say(str(error))
         return 2
@@ -174,14 +196,22 @@ def launch(args: argparse.Namespace, plan: Plan, reservation: DomainReservation)
     write_claim(run_dir, segment, plan.done)  # its room taken now, while there is some
     timeout = args.timeout or default_timeout(args.movements, plan.teacher)
     say(f"{plan.learner}, seed {args.seed}, {args.movements} movements, domain {domain}, "
-        f"{len(plan.nodes)} nodes, timeout {timeout:g} s -> {run_dir}")
+        f"{len(plan.nodes)} nodes in {len(processes)} processes, timeout {timeout:g} s -> "
+        f"{run_dir}")
     inherited = (plan.lock.fd, *reservation.fds)
     group = ProcessGroup(env=env, log_dir=plan.log_dir, inherited_fds=inherited)
 
-    def start(spec: NodeSpec, log_name: str) -> subprocess.Popen:
-        argv = [*node_prefix.get(spec.name, []), str(ROS2RUN), spec.package, spec.executable,
-                "--ros-args", "--params-file", str(plan.params_file),
-                *(["-r", f"__ns:=/{spec.namespace}"] if spec.namespace else [])]
+    def start(process: ProcessSpec, log_name: str, ends: Path | None) -> subprocess.Popen:
+        ros_args = ["--ros-args", "--params-file", str(plan.params_file)]
+        if process.composed:
+            members = [a for spec in process.members
+                       for a in ("--node", f"{spec.name}={spec.params_module}")]
+            argv = [*prefix.get(process.name, []), str(ROS2RUN), "sgim_nodes", "composed",
+                    "--process", process.name, "--ends", str(ends), *members, *ros_args]
+            return group.start(log_name, argv)
+        spec = process.members[0]
+        argv = [*prefix.get(spec.name, []), str(ROS2RUN), spec.package, spec.executable,
+                *ros_args, *(["-r", f"__ns:=/{spec.namespace}"] if spec.namespace else [])]
         if spec.interactive:  # the prompt needs this terminal
             return group.start(log_name, argv, new_session=False, stdout=None, stderr=None)
         return group.start(log_name, argv)
@@ -196,12 +226,12 @@ def launch(args: argparse.Namespace, plan: Plan, reservation: DomainReservation)
             # The terminal teacher's prompt shows the count itself: no bar drawn over it.
             progress = supervise.Progress(args.movements, plan.done,
                                           args.quiet or plan.teacher == "human")
-            supervisor = supervise.Supervisor(plan.nodes, start, plan.log_dir, timeout,
+            supervisor = Supervisor(processes, start, plan.log_dir, timeout,
                                               progress, address_file=plan.address_file)
             supervisor.start()
             arbiter_code = supervisor.watch()
             if arbiter_code != 0:
-                why = (progress.message if progress.over else "") or supervise.log_reason(
+                why = (progress.message if progress.over else "") or log_reason(
                     supervisor.log_of(ARBITER)) or "the arbiter ended"
                 raise RunFailed(f"aborted: {why} (arbiter exit code {arbiter_code}; see "
                                 f"{supervisor.log_of(ARBITER)})")

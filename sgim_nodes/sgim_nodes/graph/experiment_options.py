@@ -127,6 +127,13 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
                    help="start NODE under COMMAND, as a launch file's prefix does (e.g. "
                         "--prefix 'sim_bridge=valgrind', --prefix 'recorder=prlimit "
                         "--fsize=1000000')")
+    p.add_argument("--separate", action="store_true",
+                   help="one process per node, each on its own executor (default: the nodes "
+                        "that only pass messages share one process; docs/node_graph.md, "
+                        "\"Processes\")")
+    p.add_argument("--compose", action="append", default=[], metavar="NAME=NODE,NODE,...",
+                   help="these nodes share process NAME, instead of the default grouping "
+                        "(repeat for several processes; nodes named in none run alone)")
     p.add_argument("--domain", type=int, default=None,
                    help="run in this ROS_DOMAIN_ID, e.g. to join a graph from a test; "
                         "refused while another run holds it (default: a free one, which the "

@@ -16,7 +16,6 @@ from typing import Any
 import yaml
 
 from sgim_nodes.core.config import recorded_learner
-from sgim_nodes.graph import supervise
 from sgim_nodes.graph.description import (
     NodeSpec,
     RunOptions,
@@ -31,6 +30,7 @@ from sgim_nodes.graph.description import (
 )
 from sgim_nodes.graph.experiment_options import REPO
 from sgim_nodes.graph.overrides import parse_assignments, read_parameter_files
+from sgim_nodes.graph.processes import node_log
 from sgim_nodes.graph.run_folder import (
     METADATA,
     PARAMS,
@@ -42,6 +42,7 @@ from sgim_nodes.graph.run_folder import (
     run_name_problem,
 )
 from sgim_nodes.graph.supervise import say
+from sgim_nodes.graph.supervisor import log_reason
 from sgim_ros import record_key
 from sgim_ros.command_line import shown
 
@@ -217,8 +218,8 @@ def _recorder_trouble(run_dir: Path) -> str:
 
     parts = segments(run_dir)
     last = parts[-1].name if parts else "bag"
-    log = run_dir / "logs" / ("" if last == "bag" else last) / "recorder.log"
-    reason = supervise.log_reason(log)
+    log = node_log(run_dir / "logs" / ("" if last == "bag" else last), "recorder")
+    reason = log_reason(log)
     return reason if "could not" in reason or "space" in reason.lower() else ""
 
 

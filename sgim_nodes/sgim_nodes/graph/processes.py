@@ -22,6 +22,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from sgim_ros.ends import read_ends
+
 LAUNCHER_FD = "SGIM_LAUNCHER_FD"  # sgim_ros.entry reads it
 
 
@@ -142,3 +144,68 @@ def run_node_pids(run_dir: Path) -> list[int]:
 def group_is_empty(pgid: int) -> bool:
     """True when no live process of the group is left."""
     return not group_members(pgid)
+
+
+@dataclass
+class HostedNode:
+    """A node in a process that hosts several (sgim_ros/host.py), seen as if it were its own
+    process: its exit code is the one its ends file gives once it has ended, else its
+    process's own once that has ended (negative: a signal), else None."""
+
+    process: subprocess.Popen
+    name: str
+    ends: Path
+    _code: int | None = field(default=None, repr=False)
+
+    @property
+    def pid(self) -> int:
+        return self.process.pid
+
+    @property
+    def returncode(self) -> int | None:
+        return self.poll()
+
+    def poll(self) -> int | None:
+        if self._code is None:
+            code = read_ends(self.ends).get(self.name)
+            if code is None and self.process.poll() is not None:  # its end may be in by now
+                code = read_ends(self.ends).get(self.name, self.process.returncode)
+            self._code = code
+        return self._code
+
+    def wait(self, timeout: float | None = None) -> int:
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while (code := self.poll()) is None:
+            if deadline is not None and time.monotonic() >= deadline:
+                raise subprocess.TimeoutExpired(self.name, timeout or 0.0)
+            time.sleep(0.05)
+        return code
+
+    @property
+    def killed_with_it(self) -> bool:
+        """True when the node ended because its whole process did, not by itself."""
+        return self.poll() is not None and self.name not in read_ends(self.ends)
+
+
+NODES_SUFFIX = ".nodes"
+"""logs/PROCESS.nodes: the nodes a composed process hosts, one per line (its log holds theirs)."""
+
+
+def write_members(log_dir: Path, log_name: str, nodes: Sequence[str]) -> None:
+    path = log_dir / f"{log_name}{NODES_SUFFIX}"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("".join(f"{node}\n" for node in nodes), encoding="utf-8")
+
+
+def node_log(log_dir: Path, node: str) -> Path:
+    """The log a node of a run wrote to: logs/NODE.log when it ran alone, else the log of the
+    process that hosted it (its latest start); logs/NODE.log when neither is there."""
+    own = log_dir / f"{node}.log"
+    if own.exists():
+        return own
+    hosts = [index for index in sorted(log_dir.glob(f"*{NODES_SUFFIX}"))
+             if node in index.read_text(encoding="utf-8", errors="replace").split()]
+    if not hosts:
+        return own
+    latest = max(hosts, key=lambda index: index.stat().st_mtime_ns)
+    return latest.with_suffix(".log")

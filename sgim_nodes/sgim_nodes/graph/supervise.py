@@ -1,13 +1,10 @@
-"""Watch a running graph until it ends, and say truly how it ended.
+"""The launcher's side of a running graph: its progress, its signals and its output.
 
-A run is finished only when the arbiter says so (exit code 0 after its FINISHED status) and
-the recorder has written everything (exit code 0; the recorder exits 3 on a write error such
-as a full disk). Any other node that stops before the end fails the run, the simulator
-excepted (it holds no state and is restarted, at most MAX_RESPAWNS times). Every wait here is
-bounded: the run's --timeout, the arbiter's exit after its last status, the recorder's end,
-and the launcher's own teardown (`hard_deadline`: past it, every thread's stack goes to
-launcher.log and the launcher exits with 1, or with the run's own code once the run is
-recorded; `kill -USR1` a launcher to get those stacks at any time).
+Every wait is bounded (graph/supervisor.py watches the nodes): the run's --timeout, the
+arbiter's exit after its last status, the recorder's end, and the launcher's own teardown
+(`hard_deadline`: past it, every thread's stack goes to launcher.log and the launcher exits
+with 1, or with the run's own code once the run is recorded; `kill -USR1` a launcher to get
+those stacks at any time).
 
 The launcher's own output goes to the terminal and to logs/launcher.log; a terminal pipe that
 breaks (`run_experiment.sh ... | tee log`, then Ctrl-C, which also ends tee) is noticed once
@@ -19,28 +16,17 @@ from __future__ import annotations
 import contextlib
 import faulthandler
 import os
-import re
 import signal
 import sys
 import threading
 import time
-from collections.abc import Callable
-from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TextIO
 
-from sgim_nodes.graph.description import ARBITER, MAX_RESPAWNS, RECORDER, NodeSpec
 from sgim_nodes.graph.exit_timer import exit_later as _exit_later
 
-ARBITER_EXIT_WAIT = 60.0  # seconds for the arbiter to exit after its final status
-# The recorder ends by itself once the movements up to the final count are in and the graph
-# has been quiet (at most 30 s after the final status, nodes/recorder.py FINISH_LIMIT).
-RECORDER_EXIT_WAIT = 45.0
 # The teardown: a prompt's goodbye (<= 10 s), stop_all (<= 20 s), the metadata (well under 1 s).
 TEARDOWN_LIMIT = 90.0
 CLOSE_LIMIT = 20.0  # the launcher's own rclpy node and context (DDS participant deletion)
-RECORDER_WRITE_ERROR = 3  # the recorder's exit code when it cannot write the bag
-ROS_LOG_PREFIX = re.compile(r"^\[[A-Z]+\] \[[\d.]+\] \[[\w/.]+\]: ")
 
 
 class RunFailed(RuntimeError):
@@ -297,110 +283,3 @@ def _no_rclpy_signal_handlers():
     from rclpy.signals import SignalHandlerOptions
 
     return SignalHandlerOptions.NO
-
-
-def log_reason(log: Path, limit: int = 300) -> str:
-    """Why a node ended, from its log, to quote in the run's outcome: its first logged error
-    (the cause; later ones tend to follow from it), else the last line that looks like one
-    (a traceback's exception). DDS transport chatter is not a reason."""
-    try:
-        lines = [line.strip() for line in log.read_text(errors="replace").splitlines()
-                 if "RTPS_" not in line]
-    except OSError:
-        return ""
-    logged = [line for line in lines if line.startswith("[ERROR]")]
-    if logged:
-        return ROS_LOG_PREFIX.sub("", logged[0])[:limit]
-    for line in reversed(lines):
-        if any(word in line for word in ("Error", "error", "refused", "cannot")):
-            return line[:limit]
-    return ""
-
-
-@dataclass
-class Supervisor:
-    """Starts the graph's nodes through `launch` and watches them until the run ends."""
-
-    nodes: list[NodeSpec]
-    launch: Callable[[NodeSpec, str], object]  # (spec, log name) -> Popen
-    log_dir: Path
-    timeout: float
-    progress: Progress
-    address_file: Path | None = None  # the web teacher's page address, said once it serves
-    respawns: dict[str, int] = field(default_factory=dict)
-    procs: dict[str, object] = field(default_factory=dict)
-
-    def start(self) -> None:
-        for spec in self.nodes:
-            self.procs[spec.name] = self.launch(spec, spec.name)
-
-    def log_of(self, name: str) -> Path:
-        restarts = self.respawns.get(name, 0)
-        return self.log_dir / (f"{name}.restart{restarts}.log" if restarts else f"{name}.log")
-
-    def failure(self, name: str, code: int) -> str:
-        if name == RECORDER and code == RECORDER_WRITE_ERROR:
-            what = "the recorder could not write the bag"
-        else:
-            what = f"the {name} node stopped" if name == RECORDER else f"node {name} stopped"
-        reason = log_reason(self.log_of(name))
-        return (f"{what} (exit {code}) at movement {self.progress.count}"
-                + (f": {reason}" if reason else "") + f"; see {self.log_of(name)}")
-
-    def watch(self) -> int:
-        """Until the arbiter ends: the arbiter's exit code. RunFailed if any other node stops
-        (the simulator is restarted) or the run outlives its timeout."""
-        specs = {spec.name: spec for spec in self.nodes}
-        began = time.monotonic()
-        arbiter = self.procs[ARBITER]
-        while True:
-            self.progress.spin(0.2)
-            if self.address_file is not None and self.address_file.exists():
-                self.progress.say(f"teach at {self.address_file.read_text().strip()}")
-                self.address_file = None
-            if arbiter.poll() is not None or self.progress.over:
-                break
-            for name, child in list(self.procs.items()):
-                code = child.poll()
-                if code is None or name == ARBITER:
-                    continue
-                spec = specs[name]
-                if spec.interactive:  # the human teacher left the prompt: the run goes on
-                    say(f"{name} ended (exit {code}); the run goes on without it")
-                    del self.procs[name]
-                    continue
-                if not spec.respawn or self.respawns.get(name, 0) >= MAX_RESPAWNS:
-                    raise RunFailed(self.failure(name, code))
-                self.respawns[name] = self.respawns.get(name, 0) + 1
-                say(f"{name} stopped (exit {code}); restarting it "
-                    f"({self.respawns[name]}/{MAX_RESPAWNS})")
-                self.procs[name] = self.launch(spec, f"{name}.restart{self.respawns[name]}")
-            if time.monotonic() - began > self.timeout:
-                raise RunFailed(f"timed out after {self.timeout:g} s (--timeout) at movement "
-                                f"{self.progress.count}")
-        try:
-            arbiter.wait(timeout=ARBITER_EXIT_WAIT)
-        except Exception:  # subprocess.TimeoutExpired
-            raise RunFailed(f"the arbiter did not exit {ARBITER_EXIT_WAIT:g} s after its "
-                            f"final status; see {self.log_of(ARBITER)}") from None
-        self.progress.spin(0.5)  # the last status may still be on its way
-        return arbiter.returncode
-
-    def let_interactive_end(self, seconds: float) -> None:
-        """Give a terminal prompt (human_input) time to leave by itself once the run is over."""
-        specs = {spec.name: spec for spec in self.nodes}
-        deadline = time.monotonic() + seconds
-        for name, child in self.procs.items():
-            if specs[name].interactive:
-                while child.poll() is None and time.monotonic() < deadline:
-                    time.sleep(0.1)
-
-    def wait_for_recorder(self) -> None:
-        """The recorder ends by itself once it has written the end of the run; RunFailed if it
-        ends with an error."""
-        recorder = self.procs[RECORDER]
-        deadline = time.monotonic() + RECORDER_EXIT_WAIT
-        while recorder.poll() is None and time.monotonic() < deadline:
-            self.progress.spin(0.2)
-        if recorder.poll() is not None and recorder.returncode != 0:
-            raise RunFailed(self.failure(RECORDER, recorder.returncode))

@@ -37,7 +37,7 @@ from typing import Any
 
 from sgim_nodes.graph.batch import PROGRESS
 from sgim_nodes.graph.experiment_options import REPO
-from sgim_nodes.graph.processes import ProcessGroup
+from sgim_nodes.graph.processes import ProcessGroup, node_log
 from sgim_nodes.provenance.record import machine
 from sgim_nodes.sweep.results import read_yaml
 from sgim_nodes.sweep.sweep_file import RunSpec
@@ -87,7 +87,7 @@ def movements_done(run_dir: Path, window: int = 4096, most: int = 1 << 20) -> in
     """The arbiter's last progress line ("N/M movements") in its log. The tail read grows
     until it holds one: SGIM-ACTS's arbiter writes a line per request between them."""
     try:
-        with (run_dir / "logs" / "social_interaction.log").open("rb") as f:
+        with node_log(run_dir / "logs", "social_interaction").open("rb") as f:
             size = f.seek(0, os.SEEK_END)
             while True:
                 f.seek(max(0, size - window))

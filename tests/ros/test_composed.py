@@ -1,0 +1,116 @@
+"""Nodes sharing a process (sgim_ros/host.py, nodes/composed.py): each refuses its own bad
+configuration, and a run whose shared process is killed fails naming it and resumes whole."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import time
+
+import pytest
+import yaml
+
+from tests.conftest import REPO
+from tests.ros.test_faults import find_process
+
+pytestmark = pytest.mark.ros
+
+ROS2RUN = str(REPO / "ros_ws" / "ros2run.sh")
+RUN = str(REPO / "ros_ws" / "run_experiment.sh")
+LIGHT = ["--node", "interest_computer=sgim_nodes.nodes.interest_computer",
+         "--node", "markers=sgim_nodes.nodes.markers"]
+
+
+def composed(*args: str, timeout: float = 60) -> subprocess.CompletedProcess:
+    return subprocess.run([ROS2RUN, "sgim_nodes", "composed", *args], capture_output=True,
+                          text=True, timeout=timeout)
+
+
+def test_a_member_with_a_parameter_it_does_not_declare_stops_the_process(ros_domain, tmp_path):
+    ends = tmp_path / "p.ends"
+    done = composed("--process", "p", "--ends", str(ends), *LIGHT,
+                    "--ros-args", "-p", "markers:bogus:=1")
+    assert done.returncode == 2, done.stderr
+    assert "[p] [markers] unknown parameter 'bogus'" in done.stderr
+    assert "Traceback" not in done.stderr
+    assert not ends.exists()  # no member ran
+
+
+def test_a_node_without_an_entry_is_refused_in_one_line(ros_domain):
+    done = composed("--process", "p", "--node", "x=sgim_nodes.core.runner", *LIGHT)
+    assert done.returncode == 2
+    assert done.stderr.strip().splitlines() == [
+        "[p] --node 'x=sgim_nodes.core.runner': sgim_nodes.core.runner declares no node ENTRY "
+        "(module 'sgim_nodes.core.runner' has no attribute 'ENTRY')"]
+    twice = composed("--process", "p", *LIGHT, *LIGHT[:2])
+    assert twice.returncode == 2 and "named twice" in twice.stderr
+
+
+def test_sigint_ends_every_member_and_writes_their_ends(ros_domain, tmp_path):
+    ends, log = tmp_path / "p.ends", tmp_path / "p.log"
+    with open(log, "w") as out:
+        child = subprocess.Popen([ROS2RUN, "sgim_nodes", "composed", "--process", "p", "--ends",
+                                  str(ends), *LIGHT], stdout=out, stderr=subprocess.STDOUT,
+                                 start_new_session=True)
+    try:
+        deadline = time.monotonic() + 60
+        while "publishing markers" not in log.read_text() and time.monotonic() < deadline:
+            assert child.poll() is None, log.read_text()
+            time.sleep(0.2)
+        time.sleep(1.0)  # the last member built spins too
+        os.killpg(child.pid, signal.SIGINT)
+        child.wait(timeout=30)
+    finally:
+        if child.poll() is None:
+            os.killpg(child.pid, signal.SIGKILL)
+            child.wait()
+    assert child.returncode == 0, log.read_text()
+    assert sorted(ends.read_text().splitlines()) == ["interest_computer 0", "markers 0"]
+
+
+@pytest.mark.slow
+def test_a_killed_shared_process_fails_the_run_naming_it_and_resume_finishes_it(
+        ros_processes, ros_domain, tmp_path):
+    from sgim_nodes.bag.reader import BagReadWarning, load_run
+    from sgim_nodes.bag.resume import load_run_folder
+    from sgim_nodes.graph.processes import run_node_pids
+    from tests.golden_runs import bag_digest, runner_digest, runner_records
+    from tests.ros.test_faults import recorded_movements
+
+    run_dir = tmp_path / "light-kill"
+    common = ["--domain", str(ros_domain), "--quiet", "--timeout", "300"]
+    child = ros_processes.start(
+        "run-light-kill",
+        [RUN, "saggriac", "--seed", "4", "--movements", "300", "--eval-every", "0",
+         "--runs-dir", str(tmp_path), "--name", "light-kill", *common],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    deadline = time.monotonic() + 240
+    while recorded_movements(run_dir / "bag") < 60 and time.monotonic() < deadline:
+        assert child.poll() is None, child.communicate()[0][-3000:]
+        time.sleep(0.5)
+    pid = find_process("composed", "--process light", str(run_dir / "params.yaml"))
+    assert pid is not None, "the shared process was not found"
+    os.kill(pid, signal.SIGKILL)
+    output, _ = child.communicate(timeout=120)
+    assert child.returncode == 1, output[-3000:]
+    assert "failed: process light (recorder, " in output, output[-3000:]
+    assert "social_interaction) was killed by SIGKILL at movement" in output
+    assert not run_node_pids(run_dir)
+    meta = yaml.safe_load((run_dir / "metadata.yaml").read_text())
+    assert meta["outcome"].startswith("failed: process light")
+
+    resumed = subprocess.run([RUN, "--resume", str(run_dir), *common], capture_output=True,
+                             text=True, timeout=400)
+    assert resumed.returncode == 0, resumed.stdout[-3000:] + resumed.stderr[-3000:]
+    run = load_run_folder(run_dir)
+    assert [m.index for m in run.movements] == list(range(1, 301))
+    # What the killed process let the recorder keep is the uninterrupted run's beginning (the
+    # resumed part draws from restarted streams: docs/reliability.md).
+    with pytest.warns(BagReadWarning, match="was not closed"):
+        kept = load_run(run_dir / "bag").movements
+    uninterrupted = [r for r in runner_records("saggriac", 4, movements=300, eval_every=0)
+                     if r["type"] == "movement"]
+    assert 0 < len(kept) < 300
+    assert bag_digest(kept) == runner_digest(uninterrupted[:len(kept)])
+    assert bag_digest(run.movements[:len(kept)]) == bag_digest(kept)
