@@ -39,6 +39,8 @@ goal_timeout.
 
 from __future__ import annotations
 
+from typing import Any
+
 from sgim_msgs.action import ReachGoal
 from sgim_msgs.msg import Competence
 from sgim_msgs.srv import ChooseGoal, ExecuteAction, RegisterDemonstration
@@ -59,11 +61,11 @@ from sgim_nodes.nodes.ros_glue import (
     declare_learner,
     floats,
     learner_node_params,
-    run_node,
     vec,
     world_scale,
 )
 from sgim_nodes.nodes.sim_client import EXECUTE, SIM_CLIENT_PARAMS, SimClient
+from sgim_ros.host import NodeEntry
 from sgim_ros.interfaces import action_server, calls, declared, publishes, serves
 from sgim_ros.params import Param, positive
 from sgim_ros.ready import serve_ready
@@ -86,8 +88,8 @@ class JobRefused(ValueError):
 
 
 class LowLevelExplorer(AsyncNode):
-    def __init__(self) -> None:
-        super().__init__("low_level_explorer")
+    def __init__(self, **node_options: Any) -> None:
+        super().__init__("low_level_explorer", **node_options)
         values, self.config = declare_learner(self, PARAMS)
         self.action_size, self.outcome_size = values["action_size"], values["outcome_size"]
         self.rng = component_rng(values["seed"], "explorer")
@@ -95,6 +97,7 @@ class LowLevelExplorer(AsyncNode):
         self.scale = world_scale(values)
         self.distances = self.config.distances(self.scale)
         self.probe_scale = probe_scale_for(self.config, self.scale, self.action_size)
+        self._report_at = 0  # the job's movements at which its next feedback is due
         self.memory = MovementMemory(self, self.config, self.action_size, self.outcome_size,
                                      self.scale)
         if values["resume_from"]:
@@ -137,6 +140,7 @@ class LowLevelExplorer(AsyncNode):
         """The job: goals chosen and attempted until the cap, max_goals or a cancel."""
         request: ReachGoal.Goal = handle.request
         result = ReachGoal.Result(competence=-1.0)
+        self._report_at = request.report_after  # one job at a time
         try:
             self._check(request)
             await self.memory.reached(request.movements_before)
@@ -239,7 +243,10 @@ class LowLevelExplorer(AsyncNode):
         result.reached = floats(best)
         result.competence = self.distances.competence(goal, best, start)
         if used > 0:  # an attempted goal, even an interrupted one, counts for the interest
-            handle.publish_feedback(ReachGoal.Feedback(movements_done=result.movements_used))
+            if result.movements_used >= self._report_at:  # only where the arbiter reports
+                handle.publish_feedback(ReachGoal.Feedback(movements_done=result.movements_used))
+                self._report_at = (result.movements_used + request.report_every
+                                   if request.report_every else 0)
             result.goals_attempted += 1
             self._competences.publish(Competence(
                 stamp=self.get_clock().now().to_msg(), goal_index=chosen.index,
@@ -249,8 +256,12 @@ class LowLevelExplorer(AsyncNode):
                 from_demonstration=demonstrated, strategy=chosen.strategy))
 
 
+ENTRY = NodeEntry(LowLevelExplorer)
+"""How this node starts, alone or beside others (sgim_ros/host.py)."""
+
+
 def main(args: list[str] | None = None) -> int:
-    return run_node(LowLevelExplorer, args)
+    return ENTRY.main(args)
 
 
 if __name__ == "__main__":

@@ -30,6 +30,16 @@ class RunProgress:
         self.started = time.monotonic()
         self._last_said = 0
 
+    @property
+    def step(self) -> int:
+        """Movements between two progress reports: 5 % of the budget."""
+        return max(1, self.total // 20)
+
+    def due(self, start: int) -> int:
+        """Movements a job starting at `start` must make before its report can be said: its
+        feedback is asked for only from there (ReachGoal.report_after)."""
+        return max(0, self._last_said + self.step - start)
+
     def moved(self, count: int | None = None) -> None:
         """Every 5 % of the budget: a log line and a RunStatus. `count`: the movements done
         so far when a job under way reports them (its feedback after each goal), since the
@@ -37,7 +47,7 @@ class RunProgress:
         count = self.count() if count is None else count
         if count <= self._last_said:  # said already (a job's feedback, then its end)
             return
-        if count - self._last_said >= max(1, self.total // 20) or count >= self.total:
+        if count - self._last_said >= self.step or count >= self.total:
             self._last_said = count
             rate = count / max(1e-9, time.monotonic() - self.started)
             self.node.get_logger().info(f"{count}/{self.total} movements "

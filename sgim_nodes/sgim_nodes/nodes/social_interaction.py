@@ -390,6 +390,9 @@ class SocialInteraction(AsyncNode):
         # Feedback counts from the job's start: one that arrives after the result (a topic
         # and a service answer keep no order between them) is then behind, never ahead.
         start = self.count
+        if name == "reach_goal":  # feedback only where it can be said (run_progress.py)
+            goal.report_after = max(1, self.progress.due(start))
+            goal.report_every = self.progress.step
         result = await self.job.run(client, goal, name, self.count, self.p["call_timeout"],
                                     cut_at_once=bool(held) and name == "reach_goal",
                                     feedback=lambda f: self.progress.moved(
