@@ -10,8 +10,8 @@ The rules of a lone node hold for each member: a member that cannot start says w
 and the process exits with code 2 (the members built so far destroyed); Ctrl-C, external
 shutdown and the launcher's death end every member cleanly (the recorder, ended last, closes
 its bag). A member that ends by itself (``finished``) is removed and destroyed while the others
-spin, and its end is written to the process's ends file (``NAME CODE``), where the launcher
-reads it. The process's exit code is the first non-zero one of its members'.
+spin, and its end is told to the launcher on the process's ends pipe (sgim_ros/ends.py).
+The process's exit code is the first non-zero one of its members'.
 """
 
 from __future__ import annotations
@@ -21,7 +21,6 @@ import sys
 import traceback
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 import rclpy
 from rclpy.executors import Executor, ExternalShutdownException
@@ -31,7 +30,6 @@ from sgim_ros.command_line import check_command_line, read_parameter_file, ros_a
 from sgim_ros.ends import Ends
 from sgim_ros.entry import (
     LAUNCHER_FD,
-    AsyncNode,
     Profile,
     end_now,
     follow_launcher,
@@ -46,12 +44,12 @@ CRASH_CODE = 1
 @dataclass(frozen=True)
 class NodeEntry:
     """How a node starts: its class (called with rclpy's node options), the exceptions that
-    mean "cannot start with this configuration", and the executor it spins on alone ("single"
-    or "events"; a node that awaits, an AsyncNode, gets "single" when alone)."""
+    mean "cannot start with this configuration", and the executor it spins on alone
+    ("events", or "single" for one that must: sgim_ros/executors.py)."""
 
     factory: Callable[..., Node]
     refusals: tuple[type[Exception], ...] = ()
-    executor: str = "single"
+    executor: str = "events"
 
     @property
     def label(self) -> str:
@@ -76,7 +74,7 @@ class Member:
 
 
 def run_nodes(process: str, members: Sequence[Member], args: list[str] | None = None,
-              ends_file: Path | None = None) -> int:
+              ends_fd: int | None = None) -> int:
     """Create `members` in order and spin them on one executor until all have ended."""
     argv = sys.argv if args is None else args
     lone = len(members) == 1
@@ -113,10 +111,8 @@ def run_nodes(process: str, members: Sequence[Member], args: list[str] | None = 
             rclpy.try_shutdown()
             return 2
     kind = members[0].entry.executor if lone else "events"
-    if lone and isinstance(nodes[members[0]], AsyncNode):
-        kind = "single"
     spinner = make_executor(kind, nodes.values())
-    ends = Ends(ends_file)
+    ends = Ends(ends_fd)
     codes: dict[Member, int] = {}
     live = dict(nodes)
     profile = Profile(label)
@@ -132,6 +128,8 @@ def run_nodes(process: str, members: Sequence[Member], args: list[str] | None = 
                     if not lone:  # the others go on spinning; a lone node ends below
                         del live[member]
                         end_member(spinner, node, member, say)
+                        say(None, f"{member.name} ended (exit {codes[member]}); "
+                                  f"{len(live)} node(s) go on")
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except Exception:

@@ -3,6 +3,7 @@ shares one (graph/processes.py, HostedNode)."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 import time
@@ -12,6 +13,7 @@ import pytest
 from sgim_nodes.graph.description import NODES
 from sgim_nodes.graph.process_plan import LIGHT, parse_groups, process_plan, unknown_in_groups
 from sgim_nodes.graph.processes import HostedNode, node_log, write_members
+from sgim_ros.ends import Ends, EndsReader
 from sgim_ros.params import ParameterError
 
 SGIM_D = ["recorder", "sim_bridge", "evaluator", "markers", "interest_computer",
@@ -83,23 +85,26 @@ def test_groups_are_checked():
     assert unknown_in_groups({"a": ("recorder", "recordr")}, NODES) == ["recordr"]
 
 
-def child(tmp_path, body: str) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-c", body])
+def child(body: str, *fds: int) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-c", body], pass_fds=fds)
 
 
-def test_a_hosted_node_ends_with_its_line_or_with_its_process(tmp_path):
-    ends = tmp_path / "light.ends"
-    process = child(tmp_path, "import time; time.sleep(60)")
+def test_a_hosted_node_ends_with_its_line_or_with_its_process():
+    read_end, write_end = os.pipe()
+    process = child("import time; time.sleep(60)", write_end)
+    told = Ends(write_end)  # the launcher's test stands in for the process's writes
     try:
+        ends = EndsReader(read_end)
         arbiter = HostedNode(process, "social_interaction", ends)
         recorder = HostedNode(process, "recorder", ends)
         assert arbiter.poll() is None and recorder.poll() is None
         with pytest.raises(subprocess.TimeoutExpired):
             arbiter.wait(timeout=0.1)
-        ends.write_text("social_interaction 0\n")
+        told.write("social_interaction", 0)
         assert arbiter.wait(timeout=5) == 0 and arbiter.returncode == 0
         assert not arbiter.killed_with_it
         assert recorder.poll() is None  # its process goes on
+        os.close(write_end)
         process.kill()
         process.wait()
         assert recorder.wait(timeout=5) == -9 and recorder.killed_with_it
@@ -109,13 +114,24 @@ def test_a_hosted_node_ends_with_its_line_or_with_its_process(tmp_path):
         process.wait()
 
 
-def test_a_hosted_node_whose_line_came_as_its_process_ended_keeps_its_own_code(tmp_path):
-    ends = tmp_path / "p.ends"
-    process = child(tmp_path, f"open({str(ends)!r}, 'a').write('recorder 3\\n'); raise "
-                              "SystemExit(3)")
+def test_a_hosted_node_whose_line_came_as_its_process_ended_keeps_its_own_code():
+    read_end, write_end = os.pipe()
+    process = child(f"import os; os.write({write_end}, b'recorder 3\\n'); raise "
+                    "SystemExit(3)", write_end)
+    os.close(write_end)
     process.wait()
-    recorder = HostedNode(process, "recorder", ends)
+    recorder = HostedNode(process, "recorder", EndsReader(read_end))
     assert recorder.poll() == 3 and not recorder.killed_with_it
+
+
+def test_the_ends_pipe_keeps_lines_split_across_reads():
+    read_end, write_end = os.pipe()
+    reader = EndsReader(read_end)
+    os.write(write_end, b"centre/expert 0\nrecor")
+    assert reader.read() == {"centre/expert": 0}
+    os.write(write_end, b"der -9\ngarbage\n")
+    os.close(write_end)
+    assert reader.read() == {"centre/expert": 0, "recorder": -9} and reader.closed
 
 
 def test_a_nodes_log_is_its_own_or_its_latest_hosts(tmp_path):

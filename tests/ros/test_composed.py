@@ -27,14 +27,11 @@ def composed(*args: str, timeout: float = 60) -> subprocess.CompletedProcess:
                           text=True, timeout=timeout)
 
 
-def test_a_member_with_a_parameter_it_does_not_declare_stops_the_process(ros_domain, tmp_path):
-    ends = tmp_path / "p.ends"
-    done = composed("--process", "p", "--ends", str(ends), *LIGHT,
-                    "--ros-args", "-p", "markers:bogus:=1")
+def test_a_member_with_a_parameter_it_does_not_declare_stops_the_process(ros_domain):
+    done = composed("--process", "p", *LIGHT, "--ros-args", "-p", "markers:bogus:=1")
     assert done.returncode == 2, done.stderr
     assert "[p] [markers] unknown parameter 'bogus'" in done.stderr
     assert "Traceback" not in done.stderr
-    assert not ends.exists()  # no member ran
 
 
 def test_a_node_without_an_entry_is_refused_in_one_line(ros_domain):
@@ -47,18 +44,25 @@ def test_a_node_without_an_entry_is_refused_in_one_line(ros_domain):
     assert twice.returncode == 2 and "named twice" in twice.stderr
 
 
-def test_sigint_ends_every_member_and_writes_their_ends(ros_domain, tmp_path):
-    ends, log = tmp_path / "p.ends", tmp_path / "p.log"
+def test_sigint_ends_every_member_and_tells_their_ends(ros_domain, tmp_path):
+    from sgim_ros.ends import EndsReader
+
+    log = tmp_path / "p.log"
+    read_end, write_end = os.pipe()
     with open(log, "w") as out:
-        child = subprocess.Popen([ROS2RUN, "sgim_nodes", "composed", "--process", "p", "--ends",
-                                  str(ends), *LIGHT], stdout=out, stderr=subprocess.STDOUT,
-                                 start_new_session=True)
+        child = subprocess.Popen([ROS2RUN, "sgim_nodes", "composed", "--process", "p",
+                                  "--ends-fd", str(write_end), *LIGHT], stdout=out,
+                                 stderr=subprocess.STDOUT, start_new_session=True,
+                                 pass_fds=(write_end,))
+    os.close(write_end)
+    ends = EndsReader(read_end)
     try:
         deadline = time.monotonic() + 60
         while "publishing markers" not in log.read_text() and time.monotonic() < deadline:
             assert child.poll() is None, log.read_text()
             time.sleep(0.2)
         time.sleep(1.0)  # the last member built spins too
+        assert ends.read() == {}
         os.killpg(child.pid, signal.SIGINT)
         child.wait(timeout=30)
     finally:
@@ -66,7 +70,7 @@ def test_sigint_ends_every_member_and_writes_their_ends(ros_domain, tmp_path):
             os.killpg(child.pid, signal.SIGKILL)
             child.wait()
     assert child.returncode == 0, log.read_text()
-    assert sorted(ends.read_text().splitlines()) == ["interest_computer 0", "markers 0"]
+    assert ends.read() == {"interest_computer": 0, "markers": 0} and ends.closed
 
 
 @pytest.mark.slow

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 from sgim_nodes.graph.description import NodeSpec
 from sgim_ros.params import ParameterError
@@ -48,9 +47,6 @@ class ProcessSpec:
 
     def log_name(self, restarts: int = 0) -> str:
         return f"{self.name}.restart{restarts}" if restarts else self.name
-
-    def ends_file(self, log_dir: Path, restarts: int = 0) -> Path:
-        return log_dir / f"{self.log_name(restarts)}.ends"
 
 
 def parse_groups(items: Iterable[str]) -> dict[str, tuple[str, ...]]:

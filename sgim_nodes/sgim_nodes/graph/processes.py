@@ -22,7 +22,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from sgim_ros.ends import read_ends
+from sgim_ros.ends import EndsReader
 
 LAUNCHER_FD = "SGIM_LAUNCHER_FD"  # sgim_ros.entry reads it
 
@@ -39,9 +39,10 @@ class ProcessGroup:
     _leaders: set[int] = field(default_factory=set, repr=False)  # children leading a group
 
     def start(self, name: str, argv: Sequence[str], new_session: bool = True,
-              **popen_kwargs) -> subprocess.Popen:
+              extra_fds: Sequence[int] = (), **popen_kwargs) -> subprocess.Popen:
         """Start argv (in a new session unless told otherwise: a terminal program stays in the
-        terminal's); its output goes to log_dir/name.log when log_dir is set."""
+        terminal's); its output goes to log_dir/name.log when log_dir is set; `extra_fds` are
+        inherited too (a composed process's ends pipe)."""
         if self.log_dir is not None and "stdout" not in popen_kwargs:
             path = self.log_dir / f"{name}.log"  # a namespaced node's in a folder of its own
             path.parent.mkdir(parents=True, exist_ok=True)
@@ -53,7 +54,8 @@ class ProcessGroup:
         env = dict(os.environ if self.env is None else self.env)
         env[LAUNCHER_FD] = str(self._lifeline[0])
         child = subprocess.Popen(list(argv), env=env, start_new_session=new_session,
-                                 pass_fds=(self._lifeline[0], *self.inherited_fds),
+                                 pass_fds=(self._lifeline[0], *self.inherited_fds,
+                                           *extra_fds),
                                  **popen_kwargs)
         self.children.append(child)
         if new_session:
@@ -149,12 +151,12 @@ def group_is_empty(pgid: int) -> bool:
 @dataclass
 class HostedNode:
     """A node in a process that hosts several (sgim_ros/host.py), seen as if it were its own
-    process: its exit code is the one its ends file gives once it has ended, else its
-    process's own once that has ended (negative: a signal), else None."""
+    process: its exit code is the one its process told on the ends pipe once it has ended,
+    else its process's own once that has ended (negative: a signal), else None."""
 
     process: subprocess.Popen
     name: str
-    ends: Path
+    ends: EndsReader
     _code: int | None = field(default=None, repr=False)
 
     @property
@@ -167,9 +169,9 @@ class HostedNode:
 
     def poll(self) -> int | None:
         if self._code is None:
-            code = read_ends(self.ends).get(self.name)
+            code = self.ends.read().get(self.name)
             if code is None and self.process.poll() is not None:  # its end may be in by now
-                code = read_ends(self.ends).get(self.name, self.process.returncode)
+                code = self.ends.read().get(self.name, self.process.returncode)
             self._code = code
         return self._code
 
@@ -184,7 +186,7 @@ class HostedNode:
     @property
     def killed_with_it(self) -> bool:
         """True when the node ended because its whole process did, not by itself."""
-        return self.poll() is not None and self.name not in read_ends(self.ends)
+        return self.poll() is not None and self.name not in self.ends.read()
 
 
 NODES_SUFFIX = ".nodes"

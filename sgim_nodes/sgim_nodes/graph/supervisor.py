@@ -12,6 +12,7 @@ that dies takes its nodes with it, and the run's outcome then names the process 
 
 from __future__ import annotations
 
+import os
 import re
 import signal
 import subprocess
@@ -24,6 +25,7 @@ from sgim_nodes.graph.description import ARBITER, MAX_RESPAWNS, RECORDER
 from sgim_nodes.graph.process_plan import ProcessSpec
 from sgim_nodes.graph.processes import HostedNode, write_members
 from sgim_nodes.graph.supervise import Progress, RunFailed, say
+from sgim_ros.ends import EndsReader
 
 ARBITER_EXIT_WAIT = 60.0  # seconds for the arbiter to exit after its final status
 # The recorder ends by itself once the movements up to the final count are in and the graph
@@ -32,8 +34,9 @@ RECORDER_EXIT_WAIT = 45.0
 RECORDER_WRITE_ERROR = 3  # the recorder's exit code when it cannot write the bag
 ROS_LOG_PREFIX = re.compile(r"^\[[A-Z]+\] \[[\d.]+\] \[[\w/.]+\]: ")
 
-Launch = Callable[[ProcessSpec, str, "Path | None"], subprocess.Popen]
-"""(process, log name, ends file or None for a lone node) -> the started process."""
+Launch = Callable[[ProcessSpec, str, "int | None"], subprocess.Popen]
+"""(process, log name, the ends pipe's write end or None for a lone node) -> the started
+process, which inherits that descriptor."""
 
 
 def log_reason(log: Path, limit: int = 300) -> str:
@@ -83,10 +86,13 @@ class Supervisor:
         if not process.composed:
             self.procs[process.members[0].name] = self.launch(process, log_name, None)
             return
-        ends = self.log_dir / f"{log_name}.ends"
-        ends.unlink(missing_ok=True)
         write_members(self.log_dir, log_name, [spec.name for spec in process.members])
-        started = self.launch(process, log_name, ends)
+        read_end, write_end = os.pipe()
+        try:
+            started = self.launch(process, log_name, write_end)
+        finally:
+            os.close(write_end)  # the process holds it now: its end is the pipe's end
+        ends = EndsReader(read_end)
         for spec in process.members:
             self.procs[spec.name] = HostedNode(started, spec.name, ends)
 

@@ -15,7 +15,6 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
-from pathlib import Path
 
 from sgim_ros.host import Member, NodeEntry, run_nodes
 
@@ -30,8 +29,8 @@ def parse(argv: list[str]) -> argparse.Namespace:
     parser.add_argument("--node", action="append", required=True, metavar="NAME=MODULE",
                         help="a node: its name (namespace/name for a namespaced one) and the "
                         "module that declares its ENTRY; repeat, in the order to start them")
-    parser.add_argument("--ends", type=Path, help="a file to append 'NAME CODE' to as each "
-                        "node ends (the run launcher reads it)")
+    parser.add_argument("--ends-fd", type=int, metavar="FD", help="an inherited pipe to "
+                        "write 'NAME CODE' to as each node ends (the run launcher reads it)")
     return parser.parse_args(own)
 
 
@@ -62,7 +61,7 @@ def main(args: list[str] | None = None) -> int:
         print(f"[{options.process}] a node is named twice: {', '.join(names)}",
               file=sys.stderr, flush=True)
         return 2
-    return run_nodes(options.process, members, argv, options.ends)
+    return run_nodes(options.process, members, argv, options.ends_fd)
 
 
 if __name__ == "__main__":
