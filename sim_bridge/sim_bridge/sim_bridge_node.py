@@ -122,7 +122,7 @@ class SimBridgeNode(Node):
         super().destroy_node()
 
 
-ENTRY = NodeEntry(SimBridgeNode, executor="events")
+ENTRY = NodeEntry(SimBridgeNode)
 """How this node starts, alone or beside others (sgim_ros/host.py)."""
 
 

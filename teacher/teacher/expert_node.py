@@ -184,7 +184,7 @@ class ExpertNode(Node):
         super().destroy_node()
 
 
-ENTRY = NodeEntry(ExpertNode, executor="events")
+ENTRY = NodeEntry(ExpertNode)
 """How this node starts, alone or beside others (sgim_ros/host.py)."""
 
 

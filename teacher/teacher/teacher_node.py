@@ -307,7 +307,7 @@ class TeacherNode(Node):
         super().destroy_node()
 
 
-ENTRY = NodeEntry(TeacherNode, executor="events")
+ENTRY = NodeEntry(TeacherNode)
 """How this node starts, alone or beside others (sgim_ros/host.py)."""
 
 

@@ -158,7 +158,7 @@ class EvaluatorNode(Node):
         super().destroy_node()
 
 
-ENTRY = NodeEntry(EvaluatorNode, executor="events")
+ENTRY = NodeEntry(EvaluatorNode)
 """How this node starts, alone or beside others (sgim_ros/host.py)."""
 
 

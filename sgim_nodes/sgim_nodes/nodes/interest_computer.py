@@ -67,7 +67,7 @@ class InterestComputer(Node):
                                          self.get_clock().now().to_msg()))
 
 
-ENTRY = NodeEntry(InterestComputer, executor="events")
+ENTRY = NodeEntry(InterestComputer)
 """How this node starts, alone or beside others (sgim_ros/host.py)."""
 
 

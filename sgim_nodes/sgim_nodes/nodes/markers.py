@@ -100,7 +100,7 @@ class MarkersNode(Node):
         return self._sent["landings"] if self._batch == 0 and self._last_full > -1 else -1
 
 
-ENTRY = NodeEntry(MarkersNode, executor="events")
+ENTRY = NodeEntry(MarkersNode)
 """How this node starts, alone or beside others (sgim_ros/host.py)."""
 
 

@@ -307,8 +307,7 @@ def _usage() -> str:
     return "\n".join(lines)
 
 
-ENTRY = NodeEntry(RecorderNode, refusals=(BagWriteError, OSError),
-                  executor="events")
+ENTRY = NodeEntry(RecorderNode, refusals=(BagWriteError, OSError))
 """How this node starts, alone or beside others (sgim_ros/host.py)."""
 
 
