@@ -1,5 +1,7 @@
-"""How close a study comes to the physics it cannot avoid (issue 32): a small study through the
-graph, two runs side by side, and the same study made by the single-process runner.
+"""How close a study comes to the physics it cannot avoid: a small study through the graph, two
+runs side by side and without the markers node (as run_study.sh makes them), and the same study
+made by the single-process runner; the graph/runner wall ratio against its target
+(docs/node_graph.md, "Processes").
 
 Printed, for each: the wall time, the CPU of each node (the graph) or of the runners, the casts
 made (the learner's movements, and the evaluator's and the teacher's casts that were not kept
@@ -10,6 +12,7 @@ does the same learning with no messaging at all.
 
     source ros_ws/env.sh && python benchmarks/bench_study.py
     source ros_ws/env.sh && python benchmarks/bench_study.py --seeds 1 --movements 500
+    source ros_ws/env.sh && python benchmarks/bench_study.py --separate   # a process per node
 
 `--made DIR` makes no run: it gives the same figures for the graph runs of an experiment made
 already (say runs/experiments/study, by `ros_ws/reproduce.sh study`), from their logs' cast
@@ -40,6 +43,9 @@ sys.path.insert(0, str(REPO / "benchmarks"))
 from bench_graph_vs_runner import node_cpu  # noqa: E402
 
 from sgim_nodes.core.learner_registry import DEMO_ONLY, RANDOM, SAGGRIAC, SGIM_D  # noqa: E402
+from sgim_nodes.graph.processes import node_log  # noqa: E402
+
+STUDY_WALL_TARGET = 1.25  # graph against runner, same runs, same parallelism
 
 RUN = REPO / "ros_ws" / "run_experiment.sh"
 CASTS = re.compile(r"casts made (\d+), kept (\d+)")
@@ -86,9 +92,9 @@ def made_casts(run_dir: Path, movements: int) -> int:
     """The casts a graph run made: its movements, and the evaluator's and teacher's (their
     logs' last counts)."""
     total = movements
-    for log in ("evaluator.log", "teacher.log"):
-        found = CASTS.findall((run_dir / "logs" / log).read_text(errors="replace")) \
-            if (run_dir / "logs" / log).exists() else []
+    for node in ("evaluator", "teacher"):
+        log = node_log(run_dir / "logs", node)
+        found = CASTS.findall(log.read_text(errors="replace")) if log.exists() else []
         if found:
             total += int(found[-1][0])
     return total
@@ -199,6 +205,10 @@ def main() -> int:
     p.add_argument("--movements", type=int, default=2000)
     p.add_argument("--parallel", type=int, default=2, help="runs side by side (the cores)")
     p.add_argument("--graph-only", action="store_true")
+    p.add_argument("--separate", action="store_true",
+                   help="a process per node (run_experiment.sh --separate)")
+    p.add_argument("--compose", action="append", default=[], metavar="NAME=NODE,NODE,...",
+                   help="group nodes into processes otherwise (run_experiment.sh --compose)")
     p.add_argument("--made", type=Path, metavar="DIR",
                    help="make no run: the figures of the graph runs in DIR, made already")
     args = p.parse_args()
@@ -213,7 +223,9 @@ def main() -> int:
     runs = out / "graph"
     runs.mkdir()
     commands = [[str(RUN), learner, "--seed", str(seed), "--movements", str(args.movements),
-                 "--runs-dir", str(runs), "--name", f"{learner}-seed{seed}", "--quiet"]
+                 "--runs-dir", str(runs), "--name", f"{learner}-seed{seed}", "--quiet",
+                 "--no-markers", *(["--separate"] if args.separate else []),
+                 *(a for item in args.compose for a in ("--compose", item))]
                 for learner in args.learners for seed in range(args.seeds)]
     sampler = Sampler(runs)
     sampler.start()
@@ -225,8 +237,10 @@ def main() -> int:
     casts = sum(made_casts(run_dir, args.movements) for run_dir in runs.iterdir())
     per_node = sampler.per_node()
     cores = args.parallel
+    layout = ("a process per node" if args.separate else
+              ", ".join(args.compose) if args.compose else "the default processes")
     print(f"{len(commands)} runs ({', '.join(args.learners)} x {args.seeds} seeds x "
-          f"{args.movements} movements), {cores} side by side; one cast "
+          f"{args.movements} movements), {cores} side by side, {layout}; one cast "
           f"{1000 * cost:.2f} ms of CPU (before {1000 * cost_before:.2f})")
     print(f"graph: wall {wall:.1f} s, nodes' CPU {sum(per_node.values()):.1f} s, casts {casts} "
           f"({casts / wall:.1f}/s), physics {casts * cost:.1f} s, efficiency "
@@ -238,7 +252,7 @@ def main() -> int:
         print(f"runner: wall {runner['wall']:.1f} s, CPU {runner['cpu']:.1f} s, casts "
               f"{runner['casts']}, physics {physics:.1f} s, efficiency "
               f"{physics / (cores * runner['wall']):.2f} (the graph's bound); graph / runner: "
-              f"wall {wall / runner['wall']:.2f}, CPU "
+              f"wall {wall / runner['wall']:.2f} (target <= {STUDY_WALL_TARGET}), CPU "
               f"{sum(per_node.values()) / runner['cpu']:.2f}")
     print(f"outputs in {out}")
     return 0

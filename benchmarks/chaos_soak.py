@@ -81,13 +81,14 @@ def plan_faults(seed: int) -> list[str]:
 
 
 def node_pid(run_dir: Path, executable: str) -> int | None:
+    """The process of the run that hosts the node: its own, or the one it shares."""
     params = str(run_dir / "params")
     for cmdline in Path("/proc").glob("[0-9]*/cmdline"):
         try:
             text = cmdline.read_bytes().replace(b"\0", b" ").decode(errors="replace")
         except OSError:
             continue
-        if f"/{executable} " in text and params in text:
+        if (f"/{executable} " in text or f"--node {executable}=" in text) and params in text:
             return int(cmdline.parent.name)
     return None
 
@@ -108,7 +109,10 @@ def run_argv(seed: int, runs: Path, domain: int, name: str = "") -> list[str]:
     return [RUN, SGIM_D, "--seed", str(seed), "--movements", str(MOVEMENTS),
             "--demonstration-period", str(PERIOD), "--eval-every", str(EVAL_EVERY), "--runs-dir",
             str(runs), "--name", name or f"soak{seed}", "--domain", str(domain), "--quiet",
-            "--timeout", "600"]
+            "--timeout", "600", *LAYOUT]
+
+
+LAYOUT: list[str] = []  # run_experiment.sh's process options (--separate)
 
 
 class Peer(threading.Thread):
@@ -379,7 +383,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--runs", type=int, default=20)
     p.add_argument("--first-seed", type=int, default=0)
     p.add_argument("--keep", type=Path, help="keep the runs in this folder")
+    p.add_argument("--separate", action="store_true",
+                   help="a process per node (run_experiment.sh --separate); by default the "
+                        "message-only nodes share one, and killing one of them kills it")
     args = p.parse_args(argv)
+    LAYOUT[:] = ["--separate"] if args.separate else []
     if args.runs < 1:
         p.error("--runs must be >= 1")
     from sgim_nodes.graph.domain import reserve_domain

@@ -1,12 +1,13 @@
 """Fuzz run_experiment's command line up to the moment the first node would start.
 
-`parse_args` then `plan_new` (or `plan_resume`) and `prefixes` are everything the launcher
-does before it starts a node; `run()` turns a refusal (ParameterError, RunFolderError) into
-exit code 2 with one line per problem, and argparse refuses its own options with exit code 2
-and one "error:" line. Whatever the argument list, it is refused that way or accepted: never
-a traceback. Nothing is written outside the test's own folder: the run folder options
-(--runs-dir, --name, --resume) draw from paths inside it, and garbage tokens never start with
-"--", which argparse would read as an abbreviation of one of them.
+`parse_args` then `plan_new` (or `plan_resume`) and `processes_of` (the processes and their
+prefixes) are everything the launcher does before it starts a node; `run()` turns a refusal
+(ParameterError, RunFolderError) into exit code 2 with one line per problem, and argparse
+refuses its own options with exit code 2 and one "error:" line. Whatever the argument list, it
+is refused that way or accepted: never a traceback. Nothing is written outside the test's own
+folder: the run folder options (--runs-dir, --name, --resume) draw from paths inside it, and
+garbage tokens never start with "--", which argparse would read as an abbreviation of one of
+them.
 """
 
 from __future__ import annotations
@@ -66,10 +67,13 @@ def argument_lists(draw, root: Path) -> list[str]:
         | garbage,
         "--params-file": paths, "--prefix": st.sampled_from(
             ["sim_bridge=nice", "nobody=nice", "sim_bridge=", "sim_bridge='unclosed",
-             "garbage"]),
+             "light=nice", "garbage"]),
+        "--compose": st.sampled_from(
+            ["a=recorder,markers", "light=recorder", "x=nobody,markers", "recorder=markers,"
+             "imitation", "=a", "b=", "c/d=recorder,markers", "garbage"]),
         "--domain": numbers, "--timeout": numbers, "--resume": resumes,
     }
-    flags = ["--no-markers", "--quiet"]
+    flags = ["--no-markers", "--quiet", "--separate"]
     argv: list[str] = []
     if draw(st.integers(0, 9)):  # usually a learner, first or anywhere
         argv.append(draw(st.sampled_from(LEARNERS) if draw(st.integers(0, 5)) else garbage))
@@ -102,7 +106,7 @@ def _files(root: Path) -> None:
 @given(data=st.data())
 def test_the_command_line_is_refused_in_one_line_or_planned(tmp_path_factory, monkeypatch,
                                                              data):
-    from sgim_nodes.graph.experiment import prefixes
+    from sgim_nodes.graph.experiment import processes_of
     from sgim_nodes.graph.experiment_options import parse_args
     from sgim_nodes.graph.plan import plan_new, plan_resume
     from sgim_nodes.graph.run_folder import RunFolderError
@@ -127,7 +131,7 @@ def test_the_command_line_is_refused_in_one_line_or_planned(tmp_path_factory, mo
         try:
             plan = plan_resume(args) if args.resume is not None else plan_new(args)
             if plan is not None:
-                prefixes(args.prefix, plan.nodes)
+                processes_of(args, plan.nodes)
         except (ParameterError, RunFolderError) as error:
             lines = str(error).split("\n")
             assert all(line.strip() for line in lines), (argv, str(error))

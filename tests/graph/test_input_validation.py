@@ -320,7 +320,7 @@ def test_prefix_with_an_unclosed_quote_is_one_line():
     from sgim_ros.params import ParameterError
 
     with pytest.raises(ParameterError, match="--prefix \"sim_bridge='x\": No closing quotation"):
-        prefixes(["sim_bridge='x"], graph("random"))
+        prefixes(["sim_bridge='x"], [spec.name for spec in graph("random")])
 
 
 def test_a_namespace_without_a_name_gets_the_default_folder(tmp_path):

@@ -32,12 +32,15 @@ def wait_for(condition, timeout: float, what: str, interval: float = 0.1):
     pytest.fail(f"timed out after {timeout:g} s waiting for {what}")
 
 
-def progress(run_dir: Path, log: str = "social_interaction.log") -> int:
-    """The arbiter's last logged movement count."""
+def progress(run_dir: Path, segment: str = "") -> int:
+    """The arbiter's last logged movement count (in a resumed segment's logs: `segment`)."""
     import re
 
+    from sgim_nodes.graph.processes import node_log
+
     try:
-        text = (run_dir / "logs" / log).read_text(errors="replace")
+        text = node_log(run_dir / "logs" / segment, "social_interaction").read_text(
+            errors="replace")
     except OSError:
         return 0
     found = re.findall(r"(\d+)/\d+ movements", text)
@@ -105,7 +108,7 @@ def test_a_killed_launcher_leaves_no_node_and_holds_its_domain_until_they_end(
     # The run resumes (the killed launcher is named), and a second resume of it meanwhile is
     # refused by the run folder's lock.
     first = launch(ros_processes, "resume-1", "--resume", str(run_dir), "--quiet")
-    wait_for(lambda: progress(run_dir, "bag.resume1/social_interaction.log") > 0, 120,
+    wait_for(lambda: progress(run_dir, "bag.resume1") > 0, 120,
              "the resumed run to make movements")
     second = launch(ros_processes, "resume-2", "--resume", str(run_dir), "--quiet")
     output = finish(second, 60)

@@ -117,7 +117,9 @@ def test_wait_for_teacher_seconds_ends_each_turn_and_zero_never_waits(
     output, _ = child.communicate(timeout=330)
     assert child.returncode == 0, output[-3000:]
 
-    arbiter_log = (tmp_path / "run" / "logs" / "social_interaction.log").read_text()
+    from sgim_nodes.graph.processes import node_log
+
+    arbiter_log = node_log(tmp_path / "run" / "logs", "social_interaction").read_text()
     turns = re.findall(r"teacher's turn at movement (\d+): (.+)", arbiter_log)
     states = [msg for topic, _, msg in read_messages(tmp_path / "run" / "bag")
               if topic == "/pace_state"]

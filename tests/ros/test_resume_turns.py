@@ -20,14 +20,14 @@ RUN = str(REPO / "ros_ws" / "run_experiment.sh")
 PERIOD, MOVEMENTS = 50, 120
 
 
-def start_run(ros_processes, ros_domain, tmp_path):
+def start_run(ros_processes, ros_domain, tmp_path, *extra: str):
     """SGIM-D with a teacher every PERIOD, in tmp_path/cut; a strict teacher (a small
     tolerance) shows something at each turn."""
     return ros_processes.start(
         "run-cut", [RUN, "sgim-d", "--seed", "1", "--movements", str(MOVEMENTS),
                     "--demonstration-period", str(PERIOD), "--eval-every", "60", "--runs-dir",
                     str(tmp_path), "--name", "cut", "--domain", str(ros_domain), "--quiet",
-                    "--param", "tolerance_noise=0.1"],
+                    "--param", "tolerance_noise=0.1", *extra],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
 
@@ -104,7 +104,8 @@ def test_an_imitation_cut_by_a_kill_is_finished_on_resume(ros_processes, ros_dom
     client = GraphClient(rclpy_context, "imitation_cutter")
     moves = client.capture(Movement, "/movements", qos.RECORDS)
     run_dir = tmp_path / "cut"
-    child = start_run(ros_processes, ros_domain, tmp_path)
+    # A process per node: the imitation node is stopped alone, while the recorder goes on.
+    child = start_run(ros_processes, ros_domain, tmp_path, "--separate")
     params = str(run_dir / "params.yaml")
     # Stop the imitation node at the turn's first imitation, then kill the run.
     assert client.spin_until(lambda: any(m.index == PERIOD + 1 for m in moves), timeout=180)
