@@ -50,6 +50,10 @@ WORLD_JOB_MODULES = ("bezier", "data_files", "fishing_world", "lake", "rod_urdf"
 """The sim_bridge modules a world experiment's casts run through."""
 
 
+NOT_RUN_CODE = ("reference.py",)
+"""Modules of graph/ that no run goes through (the generated reference page's)."""
+
+
 class ReferencesOutdated(RuntimeError):
     """The kept reference digests are not today's code's; the message says what to run."""
 
@@ -70,7 +74,9 @@ def maker_sources(maker: str) -> list[Path]:
     core = sorted((package / "core").glob("*.py"))
     if maker == "runner":
         return [*core, *world, experiments / "runner_jobs.py", experiments / "probes.py"]
-    graph = [*(package / "nodes").glob("*.py"), *(package / "graph").glob("*.py"),
+    launcher = [path for path in (package / "graph").glob("*.py")
+                if path.name not in NOT_RUN_CODE]
+    graph = [*(package / "nodes").glob("*.py"), *launcher,
              *(package / "bag").glob("*.py"), *(REPO / "teacher" / "teacher").rglob("*.py"),
              *(REPO / "sgim_msgs" / "sgim_ros").glob("*.py"), *bridge.glob("*.py")]
     return sorted({*core, *world, *graph})

@@ -256,6 +256,25 @@ def interface(path: Path) -> list[str]:
     return lines
 
 
+PYTHON_API = (("sgim_nodes.analysis", "load_runs", "sgim_nodes.analysis.frames"),)
+"""(where a script imports it from, its name, the module whose docstring says the rest)."""
+
+
+def python_api() -> list[str]:
+    """The functions a script imports, with what their code says of them."""
+    import importlib
+    import inspect
+
+    lines = ["## Python API", "",
+             "What a script imports to read runs, with the documentation its code gives.", ""]
+    for package, name, detail in PYTHON_API:
+        function = getattr(importlib.import_module(package), name)
+        lines += [f"### `{package}.{name}{inspect.signature(function)}`", "",
+                  inspect.getdoc(function) or "", "",
+                  inspect.getdoc(importlib.import_module(detail)) or "", ""]
+    return lines
+
+
 def render(nodes: Sequence[NodeSpec] | None = None) -> str:
     """The whole page, for `nodes` (every node of the graph by default)."""
     nodes = list(NODES.values()) if nodes is None else list(nodes)
@@ -282,6 +301,7 @@ def render(nodes: Sequence[NodeSpec] | None = None) -> str:
     for folder in ("msg", "srv", "action"):
         for path in sorted((INTERFACES / folder).glob(f"*.{folder}")):
             lines += interface(path)
+    lines += ["", *python_api()]
     return "\n".join(lines).rstrip() + "\n"
 
 
