@@ -11,7 +11,12 @@ import time
 import pytest
 
 from sgim_nodes.graph.description import NODES
-from sgim_nodes.graph.process_plan import LIGHT, parse_groups, process_plan, unknown_in_groups
+from sgim_nodes.graph.process_plan import (
+    DEFAULT_GROUPS,
+    parse_groups,
+    process_plan,
+    unknown_in_groups,
+)
 from sgim_nodes.graph.processes import HostedNode, node_log, write_members
 from sgim_ros.ends import Ends, EndsReader
 from sgim_ros.params import ParameterError
@@ -28,15 +33,15 @@ def layout(plan) -> list[tuple[str, list[str]]]:
     return [(p.name, [spec.name for spec in p.members]) for p in plan]
 
 
-def test_by_default_the_message_only_nodes_share_one_process():
+def test_by_default_the_nodes_in_turn_share_one_process_and_the_observers_another():
     plan = process_plan(nodes(*SGIM_D))
     assert layout(plan) == [
-        ("light", ["recorder", "markers", "interest_computer", "goal_generator", "imitation",
-                   "social_interaction"]),
+        ("observers", ["recorder", "markers", "interest_computer"]),
         ("sim_bridge", ["sim_bridge"]), ("evaluator", ["evaluator"]),
-        ("low_level_explorer", ["low_level_explorer"]), ("teacher", ["teacher"])]
-    assert [p.composed for p in plan] == [True, False, False, False, False]
-    assert set(LIGHT) <= set(SGIM_D)
+        ("chain", ["goal_generator", "low_level_explorer", "imitation", "social_interaction"]),
+        ("teacher", ["teacher"])]
+    assert [p.composed for p in plan] == [True, False, False, True, False]
+    assert {n for group in DEFAULT_GROUPS.values() for n in group} <= set(SGIM_D)
 
 
 def test_separate_gives_every_node_its_own_process():

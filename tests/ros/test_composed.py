@@ -82,27 +82,27 @@ def test_a_killed_shared_process_fails_the_run_naming_it_and_resume_finishes_it(
     from tests.golden_runs import bag_digest, runner_digest, runner_records
     from tests.ros.test_faults import recorded_movements
 
-    run_dir = tmp_path / "light-kill"
+    run_dir = tmp_path / "observers-kill"
     common = ["--domain", str(ros_domain), "--quiet", "--timeout", "300"]
     child = ros_processes.start(
-        "run-light-kill",
+        "run-observers-kill",
         [RUN, "saggriac", "--seed", "4", "--movements", "300", "--eval-every", "0",
-         "--runs-dir", str(tmp_path), "--name", "light-kill", *common],
+         "--runs-dir", str(tmp_path), "--name", "observers-kill", *common],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     deadline = time.monotonic() + 240
     while recorded_movements(run_dir / "bag") < 60 and time.monotonic() < deadline:
         assert child.poll() is None, child.communicate()[0][-3000:]
         time.sleep(0.5)
-    pid = find_process("composed", "--process light", str(run_dir / "params.yaml"))
+    pid = find_process("composed", "--process observers", str(run_dir / "params.yaml"))
     assert pid is not None, "the shared process was not found"
     os.kill(pid, signal.SIGKILL)
     output, _ = child.communicate(timeout=120)
     assert child.returncode == 1, output[-3000:]
-    assert "failed: process light (recorder, " in output, output[-3000:]
-    assert "social_interaction) was killed by SIGKILL at movement" in output
+    assert ("failed: process observers (recorder, markers, interest_computer) was killed by "
+            "SIGKILL at movement") in output, output[-3000:]
     assert not run_node_pids(run_dir)
     meta = yaml.safe_load((run_dir / "metadata.yaml").read_text())
-    assert meta["outcome"].startswith("failed: process light")
+    assert meta["outcome"].startswith("failed: process observers")
 
     resumed = subprocess.run([RUN, "--resume", str(run_dir), *common], capture_output=True,
                              text=True, timeout=400)

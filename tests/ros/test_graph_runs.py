@@ -355,13 +355,12 @@ def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner,
     run = finish(child, tmp_path, learner)
     logs = tmp_path / learner / "logs"
     if separate:  # every node its own process and log
-        assert not (logs / "light.log").exists()
+        assert not (logs / "chain.log").exists()
         assert not list(logs.glob("*.nodes"))
     else:  # the arbiter and the recorder ended by themselves while their process went on
-        assert node_log(logs, "recorder") == logs / "light.log"
-        shared = (logs / "light.log").read_text()
-        for node in ("social_interaction", "recorder"):
-            assert f"[light] {node} ended (exit 0)" in shared
+        assert node_log(logs, "recorder") == logs / "observers.log"
+        for process, node in (("chain", "social_interaction"), ("observers", "recorder")):
+            assert f"[{process}] {node} ended (exit 0)" in (logs / f"{process}.log").read_text()
 
     # Every movement recorded once, in order.
     assert [m.index for m in run.movements] == list(range(1, MOVEMENTS + 1))

@@ -1,10 +1,11 @@
 """Which nodes of a run share a process (composition), and how that process is started.
 
-Every node is its own class and may run alone; nodes that only pass messages gain most from
-sharing one process and one EventsExecutor, where a message costs a fraction of one between
-processes, while the nodes that compute (the simulator, the explorer, the evaluator, the
-teachers) keep processes of their own so that both cores work. The grouping and its figures:
-docs/node_graph.md, "Processes".
+Every node is its own class and may run alone; nodes sharing one process and one
+EventsExecutor pass a message for a fraction of what it costs between processes. Nodes that
+act in turn share one (no parallelism is lost), the nodes that observe the run another, while
+the simulator, the evaluator and the teachers, which compute beside them, keep processes of
+their own so that both cores work. The grouping and its figures: docs/node_graph.md,
+"Processes".
 """
 
 from __future__ import annotations
@@ -15,10 +16,13 @@ from dataclasses import dataclass
 from sgim_nodes.graph.description import NodeSpec
 from sgim_ros.params import ParameterError
 
-LIGHT = ("recorder", "markers", "interest_computer", "goal_generator", "imitation",
-         "social_interaction")
-"""The nodes that only pass messages and keep small state: one process by default."""
-DEFAULT_GROUPS: Mapping[str, tuple[str, ...]] = {"light": LIGHT}
+CHAIN = ("low_level_explorer", "goal_generator", "imitation", "social_interaction")
+"""The nodes that act strictly in turn (the arbiter starts a job, the explorer asks the goal
+generator for each goal, or the imitation node imitates): in one process nothing is lost to
+parallelism, and the goal generator's answer no longer waits behind the observers' work."""
+OBSERVERS = ("recorder", "markers", "interest_computer")
+"""The nodes that listen to the run and publish what they make of it."""
+DEFAULT_GROUPS: Mapping[str, tuple[str, ...]] = {"chain": CHAIN, "observers": OBSERVERS}
 ALWAYS_ALONE = ("web_teacher",)
 """Nodes never composed: the web teacher serves HTTP from threads of its own (and the terminal
 teacher, `interactive`, needs the terminal)."""
