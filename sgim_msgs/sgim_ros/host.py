@@ -30,6 +30,7 @@ from sgim_ros.command_line import check_command_line, read_parameter_file, ros_a
 from sgim_ros.ends import Ends
 from sgim_ros.entry import (
     LAUNCHER_FD,
+    AsyncNode,
     Profile,
     end_now,
     follow_launcher,
@@ -45,7 +46,8 @@ CRASH_CODE = 1
 class NodeEntry:
     """How a node starts: its class (called with rclpy's node options), the exceptions that
     mean "cannot start with this configuration", and the executor it spins on alone
-    ("events", or "single" for one that must: sgim_ros/executors.py)."""
+    ("events", or "single" for one that must; a node that awaits, an AsyncNode, spins on
+    "single" when alone, and on the shared EventsExecutor when composed)."""
 
     factory: Callable[..., Node]
     refusals: tuple[type[Exception], ...] = ()
@@ -111,6 +113,8 @@ def run_nodes(process: str, members: Sequence[Member], args: list[str] | None = 
             rclpy.try_shutdown()
             return 2
     kind = members[0].entry.executor if lone else "events"
+    if lone and isinstance(nodes[members[0]], AsyncNode):
+        kind = "single"  # alone, a node that awaits keeps the executor it was proven on
     spinner = make_executor(kind, nodes.values())
     ends = Ends(ends_fd)
     codes: dict[Member, int] = {}

@@ -359,8 +359,10 @@ def test_learner_through_the_graph(ros_processes, ros_domain, tmp_path, learner,
         assert not list(logs.glob("*.nodes"))
     else:  # the arbiter and the recorder ended by themselves while their process went on
         assert node_log(logs, "recorder") == logs / "observers.log"
-        for process, node in (("chain", "social_interaction"), ("observers", "recorder")):
-            assert f"[{process}] {node} ended (exit 0)" in (logs / f"{process}.log").read_text()
+        for node in ("social_interaction", "recorder"):
+            log = node_log(logs, node)
+            if log.stem != node:  # in a shared process (the random learner's arbiter is alone)
+                assert f"[{log.stem}] {node} ended (exit 0)" in log.read_text()
 
     # Every movement recorded once, in order.
     assert [m.index for m in run.movements] == list(range(1, MOVEMENTS + 1))

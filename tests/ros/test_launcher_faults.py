@@ -204,7 +204,9 @@ def test_a_simulator_that_never_answers_ends_the_run_with_a_message(ros_processe
     assert child.returncode == 1, output[-3000:]
     outcome = metadata(run_dir)["outcome"]
     assert outcome.startswith("aborted") and "reach_goal" in outcome, outcome
-    explorer = (run_dir / "logs" / "low_level_explorer.log").read_text()
+    from sgim_nodes.graph.processes import node_log
+
+    explorer = node_log(run_dir / "logs", "low_level_explorer").read_text()
     assert "no answer from execute_action for movement 1 after 3 tries" in explorer
 
 

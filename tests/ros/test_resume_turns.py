@@ -52,7 +52,8 @@ def test_a_demonstration_given_but_not_taken_is_given_again_on_resume(
     moves = client.capture(Movement, "/movements", qos.RECORDS)
     words = client.capture(Demonstration, "/demonstrations", qos.RECORDS)
     run_dir = tmp_path / "cut"
-    child = start_run(ros_processes, ros_domain, tmp_path)
+    # A process per node: the explorer is stopped alone, while the recorder goes on.
+    child = start_run(ros_processes, ros_domain, tmp_path, "--separate")
     params = str(run_dir / "params.yaml")
     # Stop the explorer at the turn's boundary: its job never ends, so the arbiter never
     # reaches the turn, while the teacher, which follows the movements, gives its word.
