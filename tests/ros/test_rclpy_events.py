@@ -5,6 +5,7 @@ rclpy may make one unneeded, a changed one may break it)."""
 
 from __future__ import annotations
 
+import contextlib
 import statistics
 import time
 from importlib.metadata import version
@@ -35,6 +36,28 @@ def spin_until(executor, future: Future, limit: float, slice_seconds: float = 0.
     deadline = time.monotonic() + limit
     while not future.done() and time.monotonic() < deadline:
         spin_slice(executor, slice_seconds)
+
+
+@contextlib.contextmanager
+def spinning(context, kind: str, *nodes):
+    """`nodes` on an executor of `kind`; the executor is shut down and the nodes destroyed
+    after."""
+    executor = make_executor(kind, nodes, context)
+    try:
+        yield executor
+    finally:
+        executor.shutdown()
+        for node in nodes:
+            node.destroy_node()
+
+
+def ready_client(client, executor, service: str):
+    """A SetBool client of `service` once it sees the server (at most 10 s)."""
+    caller = client.create_client(SetBool, service)
+    deadline = time.monotonic() + 10
+    while not caller.service_is_ready() and time.monotonic() < deadline:
+        spin_slice(executor, 0.05)
+    return caller
 
 
 def names(prefix: str) -> tuple[str, str]:
@@ -71,21 +94,13 @@ def test_an_async_handler_answers_through_serve_async(rclpy_context, kind):
     server_name, client_name = names(kind)
     server = Server(server_name, service, rclpy_context)
     client = Node(client_name, context=rclpy_context)
-    executor = make_executor(kind, [server, client], rclpy_context)
-    try:
-        caller = client.create_client(SetBool, service)
-        ready = time.monotonic() + 10
-        while not caller.service_is_ready() and time.monotonic() < ready:
-            spin_slice(executor, 0.05)
+    with spinning(rclpy_context, kind, server, client) as executor:
+        caller = ready_client(client, executor, service)
         for data in (True, False):
             call = caller.call_async(SetBool.Request(data=data))
             spin_until(executor, call, 10.0)
             assert call.done() and call.result().success is data
             assert call.result().message == "answered"
-    finally:
-        executor.shutdown()
-        server.destroy_node()
-        client.destroy_node()
 
 
 @pytest.mark.filterwarnings("ignore:coroutine .* was never awaited:RuntimeWarning")
@@ -95,31 +110,21 @@ def test_an_unpatched_async_handler_still_fails_on_the_events_executor(rclpy_con
     server_name, client_name = names("bug")
     server = Server(server_name, service, rclpy_context, patched=False)
     client = Node(client_name, context=rclpy_context)
-    executor = make_executor("events", [server, client], rclpy_context)
-    try:
-        caller = client.create_client(SetBool, service)
-        ready = time.monotonic() + 10
-        while not caller.service_is_ready() and time.monotonic() < ready:
-            spin_slice(executor, 0.05)
-        call = caller.call_async(SetBool.Request(data=True))
+    with spinning(rclpy_context, "events", server, client) as executor:
+        call = ready_client(client, executor, service).call_async(SetBool.Request(data=True))
         with pytest.raises(TypeError):
             spin_until(executor, call, 5.0)
-    finally:
-        executor.shutdown()
-        server.destroy_node()
-        client.destroy_node()
 
 
 def test_a_spin_slice_returns_in_time_and_an_awaiting_task_idles(rclpy_context):
     node = AsyncNode(f"idle_{time.monotonic_ns() % 10**9}", context=rclpy_context)
-    executor = make_executor("events", [node], rclpy_context)
-    never = Future(executor=executor)
+    with spinning(rclpy_context, "events", node) as executor:
+        never = Future(executor=executor)
 
-    async def wait_forever() -> None:
-        await never
+        async def wait_forever() -> None:
+            await never
 
-    executor.create_task(wait_forever())
-    try:
+        executor.create_task(wait_forever())
         started = time.monotonic()
         spin_slice(executor, 0.05)
         assert time.monotonic() - started < 2.0  # bounded, however loaded the machine
@@ -127,11 +132,8 @@ def test_a_spin_slice_returns_in_time_and_an_awaiting_task_idles(rclpy_context):
         while time.monotonic() - wall < 1.0:
             spin_slice(executor, 0.1)
         per_second = (time.process_time() - cpu) / (time.monotonic() - wall)
-        assert per_second < 0.1, f"an awaiting task took {per_second:.2f} s of CPU per second"
-    finally:
         never.cancel()
-        executor.shutdown()
-        node.destroy_node()
+        assert per_second < 0.1, f"an awaiting task took {per_second:.2f} s of CPU per second"
 
 
 def test_first_of_resumes_without_waiting_for_the_next_slice(rclpy_context):
@@ -141,51 +143,40 @@ def test_first_of_resumes_without_waiting_for_the_next_slice(rclpy_context):
     server_name, client_name = names("fast")
     server = Server(server_name, service, rclpy_context)
     client = AsyncNode(client_name, context=rclpy_context)
-    executor = make_executor("events", [server, client], rclpy_context)
-    caller = client.create_client(SetBool, service)
-    times: list[float] = []
-    done = Future(executor=executor)
+    with spinning(rclpy_context, "events", server, client) as executor:
+        caller = ready_client(client, executor, service)
+        times: list[float] = []
+        done = Future(executor=executor)
 
-    async def calls() -> None:
-        while not caller.service_is_ready():
-            await first_of(client, Future(executor=executor), 0.05)
-        for index in range(200):
-            started = time.monotonic()
-            call = caller.call_async(SetBool.Request(data=index % 4 != 0))
-            assert await first_of(client, call, 10.0)
-            times.append(time.monotonic() - started)
-        done.set_result(True)
+        async def calls() -> None:
+            for index in range(200):
+                started = time.monotonic()
+                call = caller.call_async(SetBool.Request(data=index % 4 != 0))
+                assert await first_of(client, call, 10.0)
+                times.append(time.monotonic() - started)
+            done.set_result(True)
 
-    executor.create_task(calls())
-    try:
+        executor.create_task(calls())
         spin_until(executor, done, 120.0, slice_seconds=2.0)
         assert done.done(), f"{len(times)} of 200 calls answered"
         assert max(times) < 1.0, f"slowest call {max(times):.3f} s: an await waited a slice"
         assert statistics.median(times) < 0.05
-    finally:
-        executor.shutdown()
-        server.destroy_node()
-        client.destroy_node()
 
 
 def test_first_of_gives_up_at_its_timeout(rclpy_context):
     node = AsyncNode(f"late_{time.monotonic_ns() % 10**9}", context=rclpy_context)
-    executor = make_executor("events", [node], rclpy_context)
-    pending = Future(executor=executor)
-    outcome = Future(executor=executor)
+    with spinning(rclpy_context, "events", node) as executor:
+        pending = Future(executor=executor)
+        outcome = Future(executor=executor)
 
-    async def wait() -> None:
-        outcome.set_result(await first_of(node, pending, 0.2))
+        async def wait() -> None:
+            outcome.set_result(await first_of(node, pending, 0.2))
 
-    executor.create_task(wait())
-    try:
+        executor.create_task(wait())
         started = time.monotonic()
         spin_until(executor, outcome, 10.0)
         assert outcome.result() is False and pending.cancelled()
         assert 0.15 < time.monotonic() - started < 5.0
-    finally:
-        executor.shutdown()
-        node.destroy_node()
 
 
 def test_a_node_with_a_guard_condition_is_refused_by_the_events_executor(rclpy_context):
