@@ -1,10 +1,8 @@
-"""The entry point every node of the graph shares, the base of nodes that await, and a
-bounded await.
+"""The base of nodes that await, a bounded await, and how a node's process ends.
 
-A node that cannot start (a bad parameter, an unknown parameter name, an unreadable parameter
-file, a missing file) says why in one line and exits with code 2; Ctrl-C and external shutdown
-end it cleanly, and it is always destroyed. A node started by the run launcher also ends when
-the launcher dies, however it dies (see `follow_launcher`).
+How a process starts its nodes is sgim_ros/host.py's. Here: the teardown that no late signal
+cuts, the hard end of a node of a run (`end_now`), its profile, and its end when the launcher
+dies, however it dies (`follow_launcher`).
 """
 
 from __future__ import annotations
@@ -17,7 +15,6 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -82,14 +79,6 @@ async def first_of(node: Node, future: Future, timeout: float) -> bool:
         return future.done()
     finally:
         node.destroy_timer(timer)
-
-
-def run_node(factory: Callable[..., Node], args: list[str] | None = None,
-             refusals: tuple[type[Exception], ...] = (), executor: str = "single") -> int:
-    """Create and spin one node in its own process (sgim_ros/host.py, NodeEntry)."""
-    from sgim_ros.host import NodeEntry
-
-    return NodeEntry(factory, refusals, executor).main(args)
 
 
 def end_now(code: int) -> None:

@@ -271,7 +271,7 @@ def test_nodes_starting_together_never_block_on_their_shared_lifeline():
 QUICK_NODE = """
 import atexit, os, sys
 import rclpy.node
-from sgim_ros.entry import run_node
+from sgim_ros.host import NodeEntry
 
 class Done(rclpy.node.Node):
     def __init__(self):
@@ -281,7 +281,7 @@ class Done(rclpy.node.Node):
 atexit.register(lambda: print("finalized", flush=True))
 if len(sys.argv) > 1:
     os.environ["SGIM_LAUNCHER_FD"] = sys.argv[1]
-print("returned", run_node(Done, ["done_at_once"]), flush=True)
+print("returned", NodeEntry(Done).main(["done_at_once"]), flush=True)
 """
 
 

@@ -30,7 +30,7 @@ teacher, `interactive`, needs the terminal)."""
 
 @dataclass(frozen=True)
 class ProcessSpec:
-    """One process of a run: its name (its log's and ends file's) and its nodes, in order."""
+    """One process of a run: its name (its log's) and its nodes, in order."""
 
     name: str
     members: tuple[NodeSpec, ...]
