@@ -127,8 +127,7 @@ class Supervisor:
     def _dead_process(self) -> str | None:
         """A node of a composed process that died with it (a kill, a crash), if any."""
         for name, child in self.procs.items():
-            if isinstance(child, HostedNode) and child.poll() is not None \
-                    and child.killed_with_it:
+            if isinstance(child, HostedNode) and child.killed_with_it:
                 return name
         return None
 
@@ -149,8 +148,8 @@ class Supervisor:
                 break
             for name, child in list(self.procs.items()):
                 code = child.poll()
-                if code is None or name == ARBITER or name not in self.procs:
-                    continue
+                if code is None or name == ARBITER or self.procs.get(name) is not child:
+                    continue  # running, the arbiter, or gone or restarted with its process
                 process = self.process_of(name)
                 if process.interactive:  # the human teacher left the prompt: the run goes on
                     say(f"{name} ended (exit {code}); the run goes on without it")
