@@ -148,3 +148,19 @@ def test_a_nodes_log_is_its_own_or_its_latest_hosts(tmp_path):
     assert node_log(tmp_path, "recorder") == tmp_path / "light.restart1.log"
     (tmp_path / "evaluator.log").write_text("alone\n")
     assert node_log(tmp_path, "evaluator") == tmp_path / "evaluator.log"
+
+
+def test_compose_takes_a_runs_namespaced_nodes_and_refuses_unknown_names():
+    from types import SimpleNamespace
+
+    from sgim_nodes.graph.experiment import processes_of
+
+    experts = [NODES["expert"].in_namespace(ns) for ns in ("centre", "west")]
+    args = SimpleNamespace(compose=["experts=centre/expert,west/expert"], prefix=[],
+                           separate=False)
+    plan, _ = processes_of(args, [*experts, NODES["recorder"]])
+    assert layout(plan) == [("experts", ["centre/expert", "west/expert"]),
+                            ("recorder", ["recorder"])]
+    args.compose = ["experts=centre/expert,east/expert"]
+    with pytest.raises(ParameterError, match="names no node east/expert"):
+        processes_of(args, [*experts, NODES["recorder"]])

@@ -90,10 +90,11 @@ def processes_of(args: argparse.Namespace, nodes: Sequence[NodeSpec]
                  ) -> tuple[list[ProcessSpec], dict[str, list[str]]]:
     """The run's processes (a node given its own --prefix runs alone) and their prefixes."""
     groups = parse_groups(args.compose) if args.compose else None
-    unknown = unknown_in_groups(groups or {}, NODES)
+    known = {*NODES, *(spec.name for spec in nodes)}  # this run's namespaced ones too
+    unknown = unknown_in_groups(groups or {}, known)
     if unknown:
         raise ParameterError(f"--compose names no node {', '.join(unknown)} (the graph's "
-                             f"nodes: {', '.join(sorted(NODES))})")
+                             f"nodes: {', '.join(sorted(known))})")
     names = [spec.name for spec in nodes] + list(groups or DEFAULT_GROUPS)
     prefix = prefixes(args.prefix, names)
     plan = process_plan(nodes, groups, args.separate, alone=prefix)
