@@ -11,7 +11,9 @@ and the process exits with code 2 (the members built so far destroyed); Ctrl-C, 
 shutdown and the launcher's death end every member cleanly (the recorder, ended last, closes
 its bag). A member that ends by itself (``finished``) is removed and destroyed while the others
 spin, and its end is told to the launcher on the process's ends pipe (sgim_ros/ends.py).
-The process's exit code is the first non-zero one of its members'.
+Without that pipe (`ros2 launch`, which sees processes only), a member that ends with a
+non-zero code ends the whole process, so that its failure is seen. The process's exit code is
+the first non-zero one of its members'.
 """
 
 from __future__ import annotations
@@ -120,15 +122,21 @@ def run_nodes(process: str, members: Sequence[Member], args: list[str] | None = 
     codes: dict[Member, int] = {}
     live = dict(nodes)
     profile = Profile(label)
+    unheard_failure = False  # a member failed, and no ends pipe tells of it
     try:
         with profile:
-            while rclpy.ok() and len(codes) < len(members):
+            while rclpy.ok() and len(codes) < len(members) and not unheard_failure:
                 spin_slice(spinner)
                 for member, node in list(live.items()):
                     if not getattr(node, "finished", False) or member in codes:
                         continue
                     codes[member] = int(getattr(node, "exit_code", 0))
                     ends.write(member.name, codes[member])
+                    if codes[member] and ends_fd is None and not lone:
+                        say(None, f"{member.name} failed (exit {codes[member]}): the "
+                                  "process ends, as nothing else would tell of it")
+                        unheard_failure = True
+                        break
                     if not lone:  # the others go on spinning; a lone node ends below
                         del live[member]
                         end_member(spinner, node, member, say)

@@ -118,3 +118,64 @@ def test_a_killed_shared_process_fails_the_run_naming_it_and_resume_finishes_it(
     assert 0 < len(kept) < 300
     assert bag_digest(kept) == runner_digest(uninterrupted[:len(kept)])
     assert bag_digest(run.movements[:len(kept)]) == bag_digest(kept)
+
+
+QUITTER = """
+import sys
+from rclpy.node import Node
+from sgim_ros.host import Member, NodeEntry, run_nodes
+
+class Quitter(Node):  # ends by itself, failed, half a second after it starts
+    def __init__(self, **options):
+        super().__init__("quitter", **options)
+        self.finished, self.exit_code = False, 0
+        self.create_timer(0.5, self.quit)
+
+    def quit(self):
+        self.finished, self.exit_code = True, 3
+
+class Stayer(Node):  # spins until shut down
+    def __init__(self, **options):
+        super().__init__("stayer", **options)
+        self.create_timer(0.1, lambda: None)
+
+fd = int(sys.argv[1]) if len(sys.argv) > 1 else None
+raise SystemExit(run_nodes("p", [Member("quitter", NodeEntry(Quitter)),
+                                 Member("stayer", NodeEntry(Stayer))], ["p"], fd))
+"""
+
+
+def test_a_failed_member_ends_its_process_only_when_no_ends_pipe_tells_of_it(ros_domain):
+    """Under `ros2 launch`, which sees processes only, a member's failure must end its
+    process; under the run launcher, which reads the ends pipe, the others go on."""
+    import sys
+
+    alone = subprocess.run([sys.executable, "-c", QUITTER], capture_output=True, text=True,
+                           timeout=60)
+    assert alone.returncode == 3, alone.stderr
+    assert "[p] quitter failed (exit 3): the process ends" in alone.stderr
+
+    from sgim_ros.ends import EndsReader
+
+    read_end, write_end = os.pipe()
+    child = subprocess.Popen([sys.executable, "-c", QUITTER, str(write_end)],
+                             stderr=subprocess.PIPE, text=True, pass_fds=(write_end,),
+                             start_new_session=True)
+    os.close(write_end)
+    ends = EndsReader(read_end)
+    try:
+        deadline = time.monotonic() + 60
+        while ends.read() == {} and time.monotonic() < deadline:
+            assert child.poll() is None
+            time.sleep(0.1)
+        assert ends.read() == {"quitter": 3}
+        time.sleep(1.0)
+        assert child.poll() is None  # the stayer spins on
+        os.killpg(child.pid, signal.SIGINT)
+        child.wait(timeout=30)
+    finally:
+        if child.poll() is None:
+            os.killpg(child.pid, signal.SIGKILL)
+            child.wait()
+    assert child.returncode == 3
+    assert ends.read() == {"quitter": 3, "stayer": 0}
