@@ -9,6 +9,10 @@ resuming, and the human teacher's prompt (with teacher:=human, run
 `ros2 run teacher human_input` in a terminal of its own). The run ends when the recorder has
 written it; a node that stops before (the simulator excepted: it is restarted) ends it too.
 
+The nodes share processes as the script's do (docs/node_graph.md, "Processes"), except the
+recorder, which runs alone here: its end is the run's end, and launch sees a process's end
+only. `compose:=false` starts one process per node, as the script's --separate.
+
 `launch` and `launch_ros` are imported only by generate_launch_description(), so that the
 rest of this file (node_arguments) can be checked where they are not installed (tests/graph/).
 """
@@ -43,15 +47,80 @@ ARGUMENTS = (
     ("output", "", "bag directory (default: runs/<learner>-seed<N>-<time>/bag)"),
     ("params_file", "", "a ROS parameter file, checked as run_experiment's --params-file"),
     ("param", "", "NAME=VALUE assignments separated by spaces, as run_experiment's --param"),
+    ("compose", "true", "share processes as run_experiment does (false: one process per "
+     "node, as its --separate)"),
 )
+ALONE_IN_LAUNCH = ("recorder",)
+"""Nodes launched in a process of their own even when composing: the recorder's end ends the
+run, and launch learns of a process's end, not of a node's."""
 
 
 def node_arguments(arguments: Mapping[str, str]) -> list[tuple[str, dict[str, Any]]]:
     """(node name, keyword arguments of launch_ros.actions.Node) of every node of the run,
     from the graph description; ParameterError (one line per problem) before anything
     starts."""
+    specs, values = _run_nodes(arguments)
+    return [(spec.name, _node_kwargs(spec, values.for_node(spec))) for spec in specs]
+
+
+def process_arguments(arguments: Mapping[str, str], params_file: Path
+                      ) -> list[tuple[str, tuple[str, ...], dict[str, Any]]]:
+    """(process name, its nodes, keyword arguments of launch_ros.actions.Node) of every
+    process of the run: a lone node as node_arguments gives it; a composed process runs
+    `ros2 run sgim_nodes composed` and reads `params_file`, the run's parameter file
+    (RunParameters.to_yaml, each node's section its own), which the caller writes."""
+    from sgim_nodes.graph.process_plan import process_plan
+
+    specs, values = _run_nodes(arguments)
+    separate = arguments.get("compose", "true").lower() in ("false", "0", "no")
+    result = []
+    for process in process_plan(specs, separate=separate, alone=ALONE_IN_LAUNCH):
+        names = tuple(spec.name for spec in process.members)
+        if not process.composed:
+            spec = process.members[0]
+            result.append((process.name, names, _node_kwargs(spec, values.for_node(spec))))
+            continue
+        members = [a for spec in process.members
+                   for a in ("--node", f"{spec.name}={spec.params_module}")]
+        # No `name`: launch_ros would rename every node of the process to it.
+        result.append((process.name, names, {
+            "package": "sgim_nodes", "executable": "composed",
+            "arguments": ["--process", process.name, *members],
+            "parameters": [str(params_file)], "output": "screen",
+            "respawn": process.respawn,
+            "respawn_max_retries": _max_respawns() if process.respawn else -1}))
+    return result
+
+
+def run_parameter_file(arguments: Mapping[str, str]) -> dict[str, Any]:
+    """The run's ROS parameter file, as run_experiment writes it."""
+    return _run_nodes(arguments)[1].to_yaml()
+
+
+def bag_path(arguments: Mapping[str, str]) -> Path:
+    """The run's bag: output:=, or a new folder under runs/ named by learner, seed and time
+    (so fix it once per launch: see setup)."""
+    return Path(arguments.get("output") or Path("runs") / (
+        f"{arguments['learner']}-seed{arguments['seed']}-{datetime.now(UTC):%Y%m%d-%H%M%S}")
+        / "bag").resolve()
+
+
+def _max_respawns() -> int:
+    from sgim_nodes.graph.description import MAX_RESPAWNS
+
+    return MAX_RESPAWNS
+
+
+def _node_kwargs(spec, values: dict[str, Any]) -> dict[str, Any]:
+    return {"package": spec.package, "executable": spec.executable, "name": spec.executable,
+            "parameters": [values], **({"namespace": spec.namespace} if spec.namespace else {}),
+            "output": "screen", "respawn": spec.respawn,
+            "respawn_max_retries": _max_respawns() if spec.respawn else -1}
+
+
+def _run_nodes(arguments: Mapping[str, str]):
+    """The run's nodes (the terminal prompt left out) and their parameter values."""
     from sgim_nodes.graph.description import (
-        MAX_RESPAWNS,
         RunOptions,
         acts_teachers,
         graph,
@@ -71,8 +140,7 @@ def node_arguments(arguments: Mapping[str, str]) -> list[tuple[str, dict[str, An
     shared, per_node, where = read_parameter_files(files)
     assigned, assigned_where = parse_assignments(shlex.split(arguments.get("param", "")))
     learner, seed = arguments["learner"], integer("seed")
-    output = arguments.get("output") or str(
-        Path("runs") / f"{learner}-seed{seed}-{datetime.now(UTC):%Y%m%d-%H%M%S}" / "bag")
+    output = str(bag_path(arguments))
     try:
         wait = float(arguments.get("wait_for_teacher", "0"))
     except ValueError:
@@ -89,14 +157,9 @@ def node_arguments(arguments: Mapping[str, str]) -> list[tuple[str, dict[str, An
                          web_address_file=str(Path(output).resolve().parent
                                               / "web_teacher.url"))
     values = parameters(options, per_node, {**where, **assigned_where})
-    return [(spec.name, {"package": spec.package, "executable": spec.executable,
-                         "name": spec.executable, "parameters": [values.for_node(spec)],
-                         **({"namespace": spec.namespace} if spec.namespace else {}),
-                         "output": "screen", "respawn": spec.respawn,
-                         "respawn_max_retries": MAX_RESPAWNS if spec.respawn else -1})
-            for spec in graph(learner, options.teacher, markers,
-                              acts_teachers(values.shared))
-            if not spec.interactive]
+    specs = [spec for spec in graph(learner, options.teacher, markers,
+                                    acts_teachers(values.shared)) if not spec.interactive]
+    return specs, values
 
 
 def generate_launch_description():
@@ -114,25 +177,30 @@ def generate_launch_description():
     from launch_ros.actions import Node
 
     def setup(context, *args, **kwargs):
+        import yaml
+
         from sgim_ros import record_key
 
         arguments = {name: LaunchConfiguration(name).perform(context)
                      for name, _, _ in ARGUMENTS}
+        bag = bag_path(arguments)
+        arguments["output"] = str(bag)  # one run folder for every node and file below
         actions: list[Any] = []
-        nodes = node_arguments(arguments)
+        bag.parent.mkdir(parents=True, exist_ok=True)
+        params_file = bag.parent / "params.yaml"
+        params_file.write_text(yaml.safe_dump(run_parameter_file(arguments), sort_keys=False))
         # The run's secret its simulator signs movements with (sgim_ros/record_key.py), kept
         # beside the bag for the readers and handed to the nodes in their environment.
         key = record_key.new_key()
-        bag = Path(dict(nodes)["recorder"]["parameters"][0]["output"])
-        bag.parent.mkdir(parents=True, exist_ok=True)
         record_key.write_key(bag.parent, key)
-        for name, node_kwargs in nodes:
+        for name, members, node_kwargs in process_arguments(arguments, params_file):
             node = Node(**node_kwargs, additional_env={record_key.ENV: key})
             actions.append(node)
             # The recorder ends the run once it has written it (after the arbiter's final
-            # status); any other node that ends first ends it too, the simulator excepted
-            # (launch restarts it).
-            if name not in ("sim_bridge", "social_interaction"):
+            # status); any other process that ends first ends it too, except the simulator's
+            # (launch restarts it) and the arbiter's alone (it ends before the recorder; in a
+            # composed process, its end is not the process's, and a failed member's is).
+            if members not in (("sim_bridge",), ("social_interaction",)):
                 actions.append(RegisterEventHandler(OnProcessExit(
                     target_action=node,
                     on_exit=[EmitEvent(event=Shutdown(reason=f"{name} ended"))])))

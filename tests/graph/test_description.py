@@ -395,6 +395,40 @@ def test_the_launch_file_starts_what_run_experiment_starts(tmp_path, learner, te
     assert launched["evaluator"][2].get("noise") is None  # the section is the simulator's
     assert all(kw["respawn"] == (name == "sim_bridge") for name, kw in launch)
 
+    # Composed, the nodes share the launcher's processes (the recorder alone: its end is the
+    # run's), and each member reads from the run's file what the launcher's nodes read.
+    from sgim_nodes.graph.process_plan import process_plan
+
+    module = _launch_module()
+    arguments = {"learner": learner, "seed": "4", "movements": "300", "eval_every": "100",
+                 "demonstration_period": "50", "teacher": teacher, "storage": "mcap",
+                 "output": str(tmp_path / "run" / "bag"), "params_file": str(params_file),
+                 "param": "imitation_count=3",
+                 **({"wait_for_teacher": "30", "web_port": "0"} if teacher == "web" else {})}
+    run_file = tmp_path / "launch_params.yaml"
+    run_file.write_text(yaml.safe_dump(module.run_parameter_file(arguments)))
+    processes = module.process_arguments(arguments, run_file)
+    expected = process_plan(plan.nodes, alone=("recorder",))
+    assert [(name, members) for name, members, _ in processes] == [
+        (p.name, tuple(spec.name for spec in p.members)) for p in expected]
+    assert learner in ("demo-only", "random") or any(len(m) > 1 for _, m, _ in processes)
+    by_name = {spec.name: spec for spec in plan.nodes}
+    for name, members, kw in processes:
+        if len(members) == 1:
+            assert (kw["package"], kw["executable"], kw["parameters"][0]) == launcher[name]
+            continue
+        assert (kw["package"], kw["executable"], "name" in kw) == ("sgim_nodes", "composed",
+                                                                   False)
+        assert kw["parameters"] == [str(run_file)]
+        hosted = kw["arguments"][kw["arguments"].index("--process") + 2:]
+        assert hosted == [a for m in members for a in
+                          ("--node", f"{m}={by_name[m].params_module}")]
+        for member in members:
+            assert (by_name[member].package, by_name[member].executable,
+                    _what_nodes_read(run_file, by_name[member])) == launcher[member]
+    separate = module.process_arguments({**arguments, "compose": "false"}, run_file)
+    assert [(name, kw) for name, _, kw in separate] == launch
+
 
 def test_sgim_acts_teachers_are_experts_in_their_namespaces_and_the_page_is_web():
     """Issue 33: each of sgim-acts's teachers is an expert node in the namespace of its name,
@@ -463,13 +497,32 @@ def test_the_launch_file_builds_a_launch_description_with_launch_ros(monkeypatch
     context = dict(declared, learner="saggriac", output=str(tmp_path / "bag"))
     actions = setup(context)
     nodes = [a for a in actions if type(a).__name__ == "Node"]
+
+    def name(node) -> str:
+        kwargs = node.kwargs
+        return kwargs.get("name") or kwargs["arguments"][kwargs["arguments"].index("--process")
+                                                         + 1]
+
+    assert [name(n) for n in nodes] == ["recorder", "sim_bridge", "evaluator", "observers",
+                                        "chain"]
+    written = tmp_path / "params.yaml"
+    assert nodes[3].kwargs["parameters"] == [str(written)]
+    assert yaml.safe_load(written.read_text()) == module.run_parameter_file(context)
+    assert (tmp_path / "record.key").is_file()
+    # Every process but the simulator's (restarted) and the lone arbiter's (the recorder
+    # follows it) ends the launch when it ends; the chain ends only if a member fails.
+    watched = [name(h.args[0].kwargs["target_action"])
+               for h in actions if type(h).__name__ == "RegisterEventHandler"]
+    assert watched == ["recorder", "evaluator", "observers", "chain"]
+    # compose:=false: one process per node, as run_experiment's --separate.
+    made.clear()
+    actions = setup(dict(context, compose="false"))
+    nodes = [a for a in actions if type(a).__name__ == "Node"]
     assert [n.kwargs["name"] for n in nodes] == [*BASE, *GOALS, "social_interaction"]
-    # Every node but the simulator (restarted) and the arbiter (the recorder follows it)
-    # ends the launch when it ends.
     watched = [h.args[0].kwargs["target_action"].kwargs["name"]
                for h in actions if type(h).__name__ == "RegisterEventHandler"]
     assert watched == ["recorder", "evaluator", "markers", *GOALS]
-    assert description in made["LaunchDescription"]
+    assert description is not None
 
 
 def test_a_node_checks_its_run_level_settings_as_the_core_does():
