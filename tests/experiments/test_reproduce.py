@@ -80,6 +80,22 @@ def test_reproduce_makes_the_runs_once_and_writes_the_page(repo, capsys):
     assert cli.main(["pond", "--runs-only", "--ignore-shipped"]) == 0
     assert "2 runs, 0 already made, 2 to do" in capsys.readouterr().err
     (repo / "runs" / "pond").rename(repo / "runs" / "gone again")
+    # --verify casts shipped chunks again (whole, or their first casts) and compares
+    assert cli.main(["pond", "--verify", "2", "--verify-seed", "4"]) == 0
+    err = capsys.readouterr().err
+    assert "pond: verifying 2 of its shipped results (seed 4)" in err
+    assert "casts-seed3-chunk1: the same result" in err
+    assert cli.main(["pond", "--verify", "1", "--verify-movements", "3"]) == 0
+    assert "first 3 movements or casts" in capsys.readouterr().err
+    chunk = folder / "casts-seed3-chunk0.npz"
+    kept = chunk.read_bytes()
+    wrong = world_jobs.read_result(chunk)
+    wrong["points"][1, 0] += 1e-9
+    world_jobs.write_result(chunk, wrong)
+    assert cli.main(["pond", "--verify", "2", "--verify-movements", "5"]) == 1
+    assert "casts-seed3-chunk0: points differs first at entry 1" in capsys.readouterr().err
+    assert cli.main(["pond", "--verify", "1", "--graph"]) == 2
+    chunk.write_bytes(kept)
     # a result file of behaviour other than today's is not used
     stamps = folder / "stamps.yaml"
     stamps.write_text(stamps.read_text().replace(": ", ": 0", 1))

@@ -72,7 +72,11 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--verify", type=int, metavar="K",
                    help="make K shipped runs again, drawn at random, and check each against "
                         "its run table movement for movement (by the runner; --graph: "
-                        "through the graph)")
+                        "through the graph); a runner or world experiment: K of its jobs, "
+                        "against their shipped result files")
+    p.add_argument("--verify-movements", type=int, metavar="N",
+                   help="--verify checks each run's first N movements only (a cast chunk's "
+                        "first N casts), made again at that length: the quick check")
     p.add_argument("--verify-seed", type=int, metavar="S",
                    help="the seed that draws the runs --verify checks (default: one it prints)")
     p.add_argument("--graph", action="store_true",
@@ -101,8 +105,11 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         p.error("--report-only, --runs-only, --ship and --verify exclude each other")
     if args.verify is not None and args.verify < 1:
         p.error("--verify must be >= 1")
-    if (args.graph or args.verify_seed is not None) and args.verify is None:
-        p.error("--graph and --verify-seed go with --verify")
+    if (args.graph or args.verify_seed is not None or args.verify_movements is not None) \
+            and args.verify is None:
+        p.error("--graph, --verify-seed and --verify-movements go with --verify")
+    if args.verify_movements is not None and args.verify_movements < 1:
+        p.error("--verify-movements must be >= 1")
     if not (args.names or args.all or args.list or args.check or args.mark_stale
             or args.references):
         p.error("name an experiment (or --all, --list, --check, --mark-stale, --references)")
@@ -298,11 +305,12 @@ def verify_runs(exp: Experiment, args: argparse.Namespace) -> int:
 
     from sgim_nodes.experiments.verify import verify
 
-    if exp.maker != "graph":
-        say(f"{exp.name}: only graph experiments ship their runs today; nothing to verify")
+    if args.graph and exp.maker != "graph":
+        say(f"{exp.name}: a {exp.maker} experiment makes no graph run: verify it without "
+            "--graph")
         return 2
     seed = args.verify_seed if args.verify_seed is not None else secrets.randbelow(10**6)
-    found = verify(exp, args.verify, seed, args.graph, say)
+    found = verify(exp, args.verify, seed, args.graph, say, movements=args.verify_movements)
     if not found:
         say(f"{exp.name}: no shipped run of today's code to verify: `ros_ws/reproduce.sh "
             f"{exp.name}` makes and ships them")

@@ -206,8 +206,9 @@ def same_memory(world: World, learner, name: str, casts: int = SAME_MEMORY_CASTS
     return out
 
 
-def run_job(job: RunnerJob) -> dict[str, Any]:
-    """One run: its error curve, demonstrations, same-memory comparison and probes."""
+def run_job(job: RunnerJob, measures: bool = True) -> dict[str, Any]:
+    """One run: its error curve, demonstrations, same-memory comparison and probes (the last
+    two only with `measures`: a check of the curve alone needs neither)."""
     world = build_world(job.world, job.seed)
     world.goals = goals_for(job.world, job.goals)[1]
     learner = make_learner(job.learner, world.env.action_dim, world.env.outcome_dim, job.seed,
@@ -220,9 +221,10 @@ def run_job(job: RunnerJob) -> dict[str, Any]:
     out = {"job": asdict(job), "name": job.name, "fingerprint": job.fingerprint().to_dict(),
            "curve": [float(v) for v in curve], "final": float(curve[-1]),
            "seconds": time.perf_counter() - start,
-           "n_demonstrations": learner.memory.labels.count("demonstration"),
-           "same_memory": same_memory(world, learner, job.world)}
-    if probe is not None:
+           "n_demonstrations": learner.memory.labels.count("demonstration")}
+    if measures:
+        out["same_memory"] = same_memory(world, learner, job.world)
+    if probe is not None and measures:
         out["probe"] = probe.summary(FRAME, job.movements, reach_map(job.world))
     return out
 

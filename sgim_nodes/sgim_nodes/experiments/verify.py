@@ -6,13 +6,23 @@ movements as the graph for the same settings and seed), or through the graph wit
 each is compared with its run table movement for movement: what each movement was (the
 learner's own, an imitation, a demonstration), whether it landed and where, to the bit; then
 the evaluations and the demonstrations taken. The first difference is named.
+
+A runner or world experiment ships result files rather than run tables: K of its jobs are made
+again and their results compared, field by field (the time a job took aside).
+
+`--verify-movements N` checks each run's first N movements only (a world's chunk: its first N
+casts), made again at that length: a run's first movements do not depend on its budget, so
+this is the quick check (a runner job's error curve is then compared up to N; the figures
+made from its whole run are not).
 """
 
 from __future__ import annotations
 
+import dataclasses
+import json
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -135,10 +145,13 @@ def runner_columns(spec: RunSpec) -> dict[str, np.ndarray]:
 
 def _demonstration_counts(records: list[dict[str, Any]]) -> np.ndarray:
     """The learner's movement count at each demonstration it took (a periodic teacher's, or
-    an expert's answer that showed something), as the graph records it."""
+    an expert's answer that showed something: an answer with neither action nor outcome shows
+    nothing, as "none there"), as the graph records it."""
     return np.array([r["movement"] for r in records
                      if r["type"] == "demonstration"
-                     or (r["type"] == "answer" and r.get("answered"))], dtype=np.int64)
+                     or (r["type"] == "answer" and r.get("answered")
+                         and (r.get("action") is not None or r.get("outcome") is not None))],
+                    dtype=np.int64)
 
 
 def first_unequal(mine: np.ndarray, theirs: np.ndarray) -> int | None:
@@ -172,11 +185,33 @@ def graph_columns(spec: RunSpec, work: Path, timeout: float) -> dict[str, np.nda
     return {name: getattr(run, name) for name in COMPARED}
 
 
-def difference(made: dict[str, np.ndarray], shipped: RunData,
+def cut(columns: Mapping[str, np.ndarray], movements: int | None) -> dict[str, np.ndarray]:
+    """Compared columns cut to the first `movements` (None: whole): those movements, and the
+    evaluations and demonstrations before the last of them (a run that ends there evaluates
+    at its end, and a longer one takes its teacher's turn there)."""
+    columns = {name: np.asarray(columns[name]) for name in COMPARED}
+    if movements is None:
+        return columns
+    kept_evaluations = columns["eval_index"] < movements
+    return {**{name: columns[name][:movements] for name in ("process", "status", "outcome")},
+            "eval_index": columns["eval_index"][kept_evaluations],
+            "eval_mean": columns["eval_mean"][kept_evaluations],
+            "demo_index": columns["demo_index"][columns["demo_index"] < movements]}
+
+
+def shipped_columns(run: RunData, movements: int | None = None) -> dict[str, np.ndarray]:
+    """A shipped run's compared columns, cut to its first `movements` (None: whole)."""
+    return cut({name: getattr(run, name) for name in COMPARED}, movements)
+
+
+def difference(made: Mapping[str, np.ndarray], shipped: RunData | Mapping[str, np.ndarray],
                columns: Sequence[str] = COMPARED) -> str:
-    """The first way `made` differs from the shipped run; empty when it does not."""
+    """The first way `made` differs from the shipped run (or its columns, as
+    shipped_columns gives them); empty when it does not."""
+    if isinstance(shipped, RunData):
+        shipped = shipped_columns(shipped)
     for name in columns:
-        mine, theirs = np.asarray(made[name]), np.asarray(getattr(shipped, name))
+        mine, theirs = np.asarray(made[name]), np.asarray(shipped[name])
         if mine.shape != theirs.shape:
             return f"{name}: {len(mine)} made, {len(theirs)} shipped"
         k = first_unequal(mine, theirs)
@@ -187,28 +222,128 @@ def difference(made: dict[str, np.ndarray], shipped: RunData,
     return ""
 
 
+def draw(names: Sequence[str], count: int, seed: int) -> list[str]:
+    """`count` of `names` (sorted), drawn with `seed`, in their order."""
+    names = sorted(names)
+    return [names[k] for k in sorted(np.random.default_rng(seed).choice(
+        len(names), size=min(count, len(names)), replace=False))] if names else []
+
+
 def verify(experiment: Experiment, count: int, seed: int, graph: bool,
-           say: Callable[[str], None], timeout: float = 3600.0) -> list[Verified]:
-    """Make `count` shipped runs of `experiment` again (drawn with `seed`) and compare."""
+           say: Callable[[str], None], timeout: float = 3600.0,
+           movements: int | None = None) -> list[Verified]:
+    """Make `count` shipped runs (or result files) of `experiment` again, drawn with `seed`,
+    and compare; `movements`: only each run's first movements, made at that length."""
+    if experiment.maker != "graph":
+        from sgim_nodes.experiments.shipped import shipped_names
+
+        chosen = draw(list(shipped_names(experiment)), count, seed)
+        part = f", first {movements} movements or casts" if movements else ""
+        say(f"{experiment.name}: verifying {len(chosen)} of its shipped results (seed {seed}"
+            f"{part}): {', '.join(chosen)}")
+        return verify_results(experiment, chosen, say, movements)
     from sgim_nodes.experiments.shipped import shipped_runs
 
     shipped = shipped_runs(experiment)
-    names = sorted(shipped)
-    chosen = [names[k] for k in sorted(np.random.default_rng(seed).choice(
-        len(names), size=min(count, len(names)), replace=False))] if names else []
+    chosen = draw(list(shipped), count, seed)
     specs = {s.name: s for s in experiment.graph_runs}
-    say(f"{experiment.name}: verifying {len(chosen)} of its {len(names)} shipped runs (seed "
-        f"{seed}, {'through the graph' if graph else 'by the runner'}): {', '.join(chosen)}")
+    part = f", first {movements} movements" if movements else ""
+    say(f"{experiment.name}: verifying {len(chosen)} of its {len(shipped)} shipped runs (seed "
+        f"{seed}, {'through the graph' if graph else 'by the runner'}{part}): "
+        f"{', '.join(chosen)}")
     found = []
     for name in chosen:
         began = time.monotonic()
+        spec = specs[name]
+        if movements is not None:
+            spec = dataclasses.replace(spec, movements=min(movements, spec.movements))
         if graph:
             with tempfile.TemporaryDirectory(prefix="sgim-verify-") as work:
-                made = graph_columns(specs[name], Path(work), timeout)
+                made = graph_columns(spec, Path(work), timeout)
         else:
-            made = runner_columns(specs[name])
-        result = Verified(name, time.monotonic() - began, difference(made, shipped[name]))
+            made = runner_columns(spec)
+        result = Verified(name, time.monotonic() - began,
+                          difference(cut(made, movements),
+                                     shipped_columns(shipped[name], movements)))
         say(f"{name}: {'the same run' if result.same else result.difference} "
+            f"({result.seconds:.0f} s)")
+        found.append(result)
+    return found
+
+
+# --- runner and world experiments: their result files ---------------------------------------
+
+def shortened(job, movements: int | None):
+    """The job made at `movements` (a runner job's movements, a cast chunk's casts); a world
+    probe stays whole. None: the job itself."""
+    from sgim_nodes.experiments.runner_jobs import RunnerJob
+    from sgim_nodes.experiments.world_jobs import CastChunk
+
+    if movements is None:
+        return job
+    if isinstance(job, RunnerJob):
+        return dataclasses.replace(job, movements=min(movements, job.movements))
+    if isinstance(job, CastChunk):
+        return dataclasses.replace(job, casts=min(movements, job.casts))
+    return job
+
+
+def plain(result: Mapping[str, object]) -> dict[str, object]:
+    """A result as its file holds it (JSON types, numpy arrays as lists), its time aside."""
+    from sgim_nodes.experiments.runner_jobs import _plain
+
+    return {k: v for k, v in json.loads(json.dumps(result, default=_plain)).items()
+            if k != "seconds"}
+
+
+def result_difference(made: Mapping[str, object], shipped: Mapping[str, object],
+                      whole: bool) -> str:
+    """The first field where a remade result differs from the shipped one; when not
+    `whole`, a runner job's error curve and a chunk's points are compared as a prefix."""
+    made, shipped = plain(made), plain(shipped)
+    if not whole:
+        key = "curve" if "curve" in made else "points" if "points" in made else None
+        if key is not None:
+            mine, theirs = np.asarray(made[key], dtype=float), np.asarray(shipped[key],
+                                                                          dtype=float)
+            k = first_unequal(mine, theirs[:len(mine)])
+            return "" if k is None else f"{key} differs first at entry {k}: {mine[k]} made, " \
+                                        f"{theirs[k]} shipped"
+    for key in sorted(shipped):  # what the file keeps (a world's keeps no name)
+        mine, theirs = made.get(key), shipped[key]
+        if key in ("points", "values", "curve") and mine is not None:
+            a, b = np.asarray(mine, dtype=float), np.asarray(theirs, dtype=float)
+            k = first_unequal(a, b) if a.shape[1:] == b.shape[1:] else 0
+            if k is not None:
+                return f"{key} differs first at entry {k}"
+        elif json.dumps(mine, sort_keys=True) != json.dumps(theirs, sort_keys=True):
+            return f"{key}: {mine!r} made, {theirs!r} shipped"
+    return ""
+
+
+def verify_results(experiment: Experiment, names: Sequence[str], say: Callable[[str], None],
+                   movements: int | None = None) -> list[Verified]:
+    """Make the named jobs of a runner or world experiment again and compare their results
+    with the shipped files; `movements`: each at that length (shortened)."""
+    from sgim_nodes.experiments.runner_jobs import RunnerJob
+    from sgim_nodes.experiments.shipped import _file_jobs, results_folder
+
+    jobs, module = _file_jobs(experiment)
+    by_name = {job.name: job for job in jobs}
+    found = []
+    for name in names:
+        job = by_name[name]
+        short = shortened(job, movements)
+        began = time.monotonic()
+        # A shortened runner job's curve is compared; its end-of-run measures are not made.
+        made = (module.run_job(short, measures=False)
+                if isinstance(job, RunnerJob) and short != job else module.run_job(short))
+        shipped = module.read_result(results_folder(experiment) /
+                                     module.result_path(Path("."), job).name)
+        why = ("its shipped file is unreadable" if shipped is None else
+               result_difference(made, shipped, short == job))
+        result = Verified(name, time.monotonic() - began, why)
+        say(f"{name}: {'the same result' if result.same else result.difference} "
             f"({result.seconds:.0f} s)")
         found.append(result)
     return found
