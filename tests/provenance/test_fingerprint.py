@@ -54,6 +54,19 @@ def test_environment_holds_code_world_data_and_versions():
     assert env["numpy"] == numpy.__version__
 
 
+def test_a_python_patch_release_gives_the_same_versions_a_minor_one_does_not(monkeypatch):
+    """Machines differ in Python's patch release (Debian 12 has 3.11.2): a run made on one
+    is today's run on the other, and the kept references stay valid."""
+    import platform
+
+    monkeypatch.setattr(platform, "python_version_tuple", lambda: ("3", "11", "2"))
+    debian = fp.library_versions()
+    monkeypatch.setattr(platform, "python_version_tuple", lambda: ("3", "11", "7"))
+    assert fp.library_versions() == debian and debian["python"] == "3.11"
+    monkeypatch.setattr(platform, "python_version_tuple", lambda: ("3", "12", "1"))
+    assert fp.library_versions() != debian
+
+
 def test_the_same_parameters_give_the_same_value_whatever_their_order():
     a = fp.fingerprint({"x": 1, "nested": {"b": 2.0, "a": [1, 2]}})
     b = fp.fingerprint({"nested": {"a": [1, 2], "b": 2.0}, "x": 1})

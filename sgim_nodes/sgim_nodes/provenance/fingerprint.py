@@ -189,7 +189,10 @@ def data_files() -> dict[str, Path]:
 
 
 def library_versions() -> dict[str, str]:
-    found = {"python": platform.python_version()}
+    """The versions that can change a run: the libraries' (pinned by requirements.txt), and
+    Python's major and minor (a patch release changes no arithmetic, and machines differ in
+    it: Debian 12 has 3.11.2)."""
+    found = {"python": ".".join(platform.python_version_tuple()[:2])}
     for dist in LIBRARIES:
         try:
             found[dist] = metadata.version(dist)
