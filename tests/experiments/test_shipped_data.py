@@ -12,6 +12,9 @@ from sgim_nodes.experiments.world_jobs import CastChunk
 
 FIRST = 160
 """Movements made again (casts, for a world's chunk): past the first teacher's turn."""
+EVALUATIONS = 3
+"""A runner job's evaluations compared (its result holds no movements): the start's and two
+after learning."""
 
 
 @pytest.mark.parametrize("name", [e.name for e in pinned.all_experiments()])
@@ -29,7 +32,10 @@ def test_one_shipped_run_of_each_experiment_is_made_again_the_same(name):
                        if isinstance(jobs.get(n), RunnerJob | CastChunk))
         if not names:
             pytest.skip(f"{name} ships no result of today's code that can be made shorter")
-        found = verify.verify_results(experiment, verify.draw(names, 1, 0), said.append,
-                                      movements=FIRST)
+        chosen = verify.draw(names, 1, 0)
+        job = jobs[chosen[0]]
+        movements = ((EVALUATIONS - 1) * job.eval_every + 1 if isinstance(job, RunnerJob)
+                     else FIRST)
+        found = verify.verify_results(experiment, chosen, said.append, movements=movements)
     assert len(found) == 1, said
     assert found[0].same, said

@@ -12,8 +12,8 @@ again and their results compared, field by field (the time a job took aside).
 
 `--verify-movements N` checks each run's first N movements only (a world's chunk: its first N
 casts), made again at that length: a run's first movements do not depend on its budget, so
-this is the quick check (a runner job's error curve is then compared up to N; the figures
-made from its whole run are not).
+this is the quick check (a runner job's error curve is then compared at its evaluations
+before N; the figures made from its whole run are not).
 """
 
 from __future__ import annotations
@@ -288,12 +288,18 @@ def shortened(job, movements: int | None):
     return job
 
 
+NOT_RESULTS = ("seconds", "fingerprint", "machine")
+"""What a result file says of how it was made, not what was made: its time, the fingerprint
+of the code and versions that made it (the stamps say which behaviour that was), and the
+machine it was made on."""
+
+
 def plain(result: Mapping[str, object]) -> dict[str, object]:
-    """A result as its file holds it (JSON types, numpy arrays as lists), its time aside."""
+    """A result as its file holds it (JSON types, numpy arrays as lists), NOT_RESULTS aside."""
     from sgim_nodes.experiments.runner_jobs import _plain
 
     return {k: v for k, v in json.loads(json.dumps(result, default=_plain)).items()
-            if k != "seconds"}
+            if k not in NOT_RESULTS}
 
 
 def result_difference(made: Mapping[str, object], shipped: Mapping[str, object],
@@ -317,7 +323,7 @@ def result_difference(made: Mapping[str, object], shipped: Mapping[str, object],
             if k is not None:
                 return f"{key} differs first at entry {k}"
         elif json.dumps(mine, sort_keys=True) != json.dumps(theirs, sort_keys=True):
-            return f"{key}: {mine!r} made, {theirs!r} shipped"
+            return f"{key}: {str(mine)[:80]} made, {str(theirs)[:80]} shipped"
     return ""
 
 
@@ -335,9 +341,13 @@ def verify_results(experiment: Experiment, names: Sequence[str], say: Callable[[
         job = by_name[name]
         short = shortened(job, movements)
         began = time.monotonic()
-        # A shortened runner job's curve is compared; its end-of-run measures are not made.
-        made = (module.run_job(short, measures=False)
-                if isinstance(job, RunnerJob) and short != job else module.run_job(short))
+        if isinstance(job, RunnerJob) and short != job:
+            # Its curve up to the last evaluation before its end (a run evaluates again at
+            # its end); its end-of-run measures are neither made nor compared.
+            made = module.run_job(short, measures=False)
+            made["curve"] = made["curve"][:len(range(0, short.movements, job.eval_every))]
+        else:
+            made = module.run_job(short)
         shipped = module.read_result(results_folder(experiment) /
                                      module.result_path(Path("."), job).name)
         why = ("its shipped file is unreadable" if shipped is None else
