@@ -73,6 +73,7 @@ def test_reproduce_makes_the_runs_once_and_writes_the_page(repo, capsys):
     (repo / "runs" / "pond").rename(repo / "runs" / "gone")
     assert cli.main(["pond", "--report-only"]) == 0
     after = (repo / "docs" / "pond.md").read_text()
+    assert "2 of 2 results read from `experiments/shipped/pond/`" in after  # its provenance
     assert {n: b for n, b in pages.blocks_of(after).items() if n != "provenance"} == \
         {n: b for n, b in pages.blocks_of(text).items() if n != "provenance"}
     assert cli.main(["pond", "--runs-only"]) == 0  # shipped: nothing to cast again

@@ -281,7 +281,8 @@ def reproduce(exp: Experiment, args: argparse.Namespace, command: str) -> int:
             "(resumable), then --report-only makes its pages again")
         return 2
     wall = time.monotonic() - began
-    notes = [*report.notes, *([f"runs in `{_shown(runs_dir)}`"] if runs_dir.is_dir() else [])]
+    notes = [*report.notes, *([f"runs in `{_shown(runs_dir)}`"] if runs_dir.is_dir() else []),
+             *shipped_note(exp, runs_dir)]
     outputs = [*exp.pages, _shown(FIGURES)]  # what this command writes is not a change
     made = Provenance.now(command, exp.name, current_fingerprint(exp, args.parallel),
                           environment(), wall, notes,
@@ -319,6 +320,19 @@ def verify_runs(exp: Experiment, args: argparse.Namespace) -> int:
     say(f"{exp.name}: {len(found) - len(wrong)} of {len(found)} runs made again the same"
         + (f"; differ: {', '.join(wrong)}" if wrong else ""))
     return 1 if wrong else 0
+
+
+def shipped_note(exp: Experiment, runs_dir: Path) -> list[str]:
+    """Where a runner or world experiment's results came from, when some came from the
+    shipped files (a graph experiment's report says so itself)."""
+    from sgim_nodes.experiments.shipped import _file_jobs, results_folder
+
+    if exp.maker == "graph":
+        return []
+    jobs, module = _file_jobs(exp)
+    taken = sum(not module.result_path(runs_dir, job).is_file() for job in jobs)
+    return ([f"{taken} of {len(jobs)} results read from "
+             f"`{_shown(results_folder(exp))}/`"] if taken else [])
 
 
 def shipped_already(exp: Experiment) -> set[str]:
