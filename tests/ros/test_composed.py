@@ -3,10 +3,12 @@ configuration, and a run whose shared process is killed fails naming it and resu
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
 import time
+from collections.abc import Iterator
 
 import pytest
 import yaml
@@ -20,6 +22,23 @@ ROS2RUN = str(REPO / "ros_ws" / "ros2run.sh")
 RUN = str(REPO / "ros_ws" / "run_experiment.sh")
 LIGHT = ["--node", "interest_computer=sgim_nodes.nodes.interest_computer",
          "--node", "markers=sgim_nodes.nodes.markers"]
+
+
+@contextlib.contextmanager
+def reaped(child: subprocess.Popen) -> Iterator[subprocess.Popen]:
+    """The child's process group, killed on the way out if it still runs (a failed test)."""
+    try:
+        yield child
+    finally:
+        if child.poll() is None:
+            os.killpg(child.pid, signal.SIGKILL)
+            child.wait()
+
+
+def interrupt(child: subprocess.Popen) -> None:
+    """Ctrl-C to the child's process group, and its end awaited."""
+    os.killpg(child.pid, signal.SIGINT)
+    child.wait(timeout=30)
 
 
 def composed(*args: str, timeout: float = 60) -> subprocess.CompletedProcess:
@@ -56,19 +75,14 @@ def test_sigint_ends_every_member_and_tells_their_ends(ros_domain, tmp_path):
                                  pass_fds=(write_end,))
     os.close(write_end)
     ends = EndsReader(read_end)
-    try:
+    with reaped(child):
         deadline = time.monotonic() + 60
         while "publishing markers" not in log.read_text() and time.monotonic() < deadline:
             assert child.poll() is None, log.read_text()
             time.sleep(0.2)
         time.sleep(1.0)  # the last member built spins too
         assert ends.read() == {}
-        os.killpg(child.pid, signal.SIGINT)
-        child.wait(timeout=30)
-    finally:
-        if child.poll() is None:
-            os.killpg(child.pid, signal.SIGKILL)
-            child.wait()
+        interrupt(child)
     assert child.returncode == 0, log.read_text()
     assert ends.read() == {"interest_computer": 0, "markers": 0} and ends.closed
 
@@ -163,7 +177,7 @@ def test_a_failed_member_ends_its_process_only_when_no_ends_pipe_tells_of_it(ros
                              start_new_session=True)
     os.close(write_end)
     ends = EndsReader(read_end)
-    try:
+    with reaped(child):
         deadline = time.monotonic() + 60
         while ends.read() == {} and time.monotonic() < deadline:
             assert child.poll() is None
@@ -171,11 +185,6 @@ def test_a_failed_member_ends_its_process_only_when_no_ends_pipe_tells_of_it(ros
         assert ends.read() == {"quitter": 3}
         time.sleep(1.0)
         assert child.poll() is None  # the stayer spins on
-        os.killpg(child.pid, signal.SIGINT)
-        child.wait(timeout=30)
-    finally:
-        if child.poll() is None:
-            os.killpg(child.pid, signal.SIGKILL)
-            child.wait()
+        interrupt(child)
     assert child.returncode == 3
     assert ends.read() == {"quitter": 3, "stayer": 0}
