@@ -69,10 +69,24 @@ def process_arguments(arguments: Mapping[str, str], params_file: Path
     process of the run: a lone node as node_arguments gives it; a composed process runs
     `ros2 run sgim_nodes composed` and reads `params_file`, the run's parameter file
     (RunParameters.to_yaml, each node's section its own), which the caller writes."""
+    specs, values = _run_nodes(arguments)
+    return _processes(specs, values, params_file, _separate(arguments))
+
+
+def _separate(arguments: Mapping[str, str]) -> bool:
+    """compose:=false: one process per node."""
+    return not _flag(arguments, "compose")
+
+
+def _flag(arguments: Mapping[str, str], name: str) -> bool:
+    """A true-or-false launch argument, true unless given as false, 0 or no."""
+    return arguments.get(name, "true").lower() not in ("false", "0", "no")
+
+
+def _processes(specs, values, params_file: Path, separate: bool
+               ) -> list[tuple[str, tuple[str, ...], dict[str, Any]]]:
     from sgim_nodes.graph.process_plan import process_plan
 
-    specs, values = _run_nodes(arguments)
-    separate = arguments.get("compose", "true").lower() in ("false", "0", "no")
     result = []
     for process in process_plan(specs, separate=separate, alone=ALONE_IN_LAUNCH):
         names = tuple(spec.name for spec in process.members)
@@ -80,12 +94,10 @@ def process_arguments(arguments: Mapping[str, str], params_file: Path
             spec = process.members[0]
             result.append((process.name, names, _node_kwargs(spec, values.for_node(spec))))
             continue
-        members = [a for spec in process.members
-                   for a in ("--node", f"{spec.name}={spec.params_module}")]
         # No `name`: launch_ros would rename every node of the process to it.
         result.append((process.name, names, {
             "package": "sgim_nodes", "executable": "composed",
-            "arguments": ["--process", process.name, *members],
+            "arguments": ["--process", process.name, *process.node_options()],
             "parameters": [str(params_file)], "output": "screen",
             "respawn": process.respawn,
             "respawn_max_retries": _max_respawns() if process.respawn else -1}))
@@ -146,7 +158,7 @@ def _run_nodes(arguments: Mapping[str, str]):
     except ValueError:
         raise ParameterError(f"launch argument wait_for_teacher:="
                              f"{arguments['wait_for_teacher']!r} must be seconds") from None
-    markers = arguments.get("markers", "true").lower() not in ("false", "0", "no")
+    markers = _flag(arguments, "markers")
     options = RunOptions(learner, seed, integer("movements"), integer("eval_every"),
                          integer("demonstration_period"), arguments["teacher"],
                          str(Path(output).resolve()), arguments["storage"],
@@ -186,14 +198,16 @@ def generate_launch_description():
         bag = bag_path(arguments)
         arguments["output"] = str(bag)  # one run folder for every node and file below
         actions: list[Any] = []
+        specs, values = _run_nodes(arguments)  # the parameter files read once
         bag.parent.mkdir(parents=True, exist_ok=True)
         params_file = bag.parent / "params.yaml"
-        params_file.write_text(yaml.safe_dump(run_parameter_file(arguments), sort_keys=False))
+        params_file.write_text(yaml.safe_dump(values.to_yaml(), sort_keys=False))
         # The run's secret its simulator signs movements with (sgim_ros/record_key.py), kept
         # beside the bag for the readers and handed to the nodes in their environment.
         key = record_key.new_key()
         record_key.write_key(bag.parent, key)
-        for name, members, node_kwargs in process_arguments(arguments, params_file):
+        for name, members, node_kwargs in _processes(specs, values, params_file,
+                                                     _separate(arguments)):
             node = Node(**node_kwargs, additional_env={record_key.ENV: key})
             actions.append(node)
             # The recorder ends the run once it has written it (after the arbiter's final

@@ -205,11 +205,9 @@ def launch(args: argparse.Namespace, plan: Plan, reservation: DomainReservation)
     def start(process: ProcessSpec, log_name: str, ends_fd: int | None) -> subprocess.Popen:
         ros_args = ["--ros-args", "--params-file", str(plan.params_file)]
         if process.composed:
-            members = [a for spec in process.members
-                       for a in ("--node", f"{spec.name}={spec.params_module}")]
             argv = [*prefix.get(process.name, []), str(ROS2RUN), "sgim_nodes", "composed",
-                    "--process", process.name, "--ends-fd", str(ends_fd), *members,
-                    *ros_args]
+                    "--process", process.name, "--ends-fd", str(ends_fd),
+                    *process.node_options(), *ros_args]
             return group.start(log_name, argv, extra_fds=(ends_fd,))
         spec = process.members[0]
         argv = [*prefix.get(spec.name, []), str(ROS2RUN), spec.package, spec.executable,

@@ -49,6 +49,10 @@ class ProcessSpec:
     def interactive(self) -> bool:
         return any(spec.interactive for spec in self.members)
 
+    def node_options(self) -> list[str]:
+        """`composed`'s options naming its nodes, in order: --node NAME=MODULE each."""
+        return [a for spec in self.members for a in ("--node", f"{spec.name}={spec.params_module}")]
+
     def log_name(self, restarts: int = 0) -> str:
         return f"{self.name}.restart{restarts}" if restarts else self.name
 
