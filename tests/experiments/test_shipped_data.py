@@ -27,7 +27,7 @@ def test_one_shipped_run_of_each_experiment_is_made_again_the_same(name):
         found = verify.verify(experiment, 1, 0, False, said.append, movements=FIRST)
     else:
         # Jobs that can be made shorter (a world's probes are made whole only).
-        jobs = {job.name: job for job in shipped._file_jobs(experiment)[0]}
+        jobs = {job.name: job for job in shipped.file_jobs(experiment)[0]}
         names = sorted(n for n in shipped.shipped_names(experiment)
                        if isinstance(jobs.get(n), RunnerJob | CastChunk))
         if not names:

@@ -325,11 +325,11 @@ def verify_runs(exp: Experiment, args: argparse.Namespace) -> int:
 def shipped_note(exp: Experiment, runs_dir: Path) -> list[str]:
     """Where a runner or world experiment's results came from, when some came from the
     shipped files (a graph experiment's report says so itself)."""
-    from sgim_nodes.experiments.shipped import _file_jobs, results_folder
+    from sgim_nodes.experiments.shipped import file_jobs, results_folder
 
     if exp.maker == "graph":
         return []
-    jobs, module = _file_jobs(exp)
+    jobs, module = file_jobs(exp)
     taken = sum(not module.result_path(runs_dir, job).is_file() for job in jobs)
     return ([f"{taken} of {len(jobs)} results read from "
              f"`{_shown(results_folder(exp))}/`"] if taken else [])

@@ -16,8 +16,10 @@ A run shared by two experiments (same name, same configuration) is one table.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
+from types import ModuleType
+from typing import Any
 
 from sgim_nodes.analysis.pooling import run_fingerprint
 from sgim_nodes.analysis.run_table import RunTableError, load_run, read_stamp, save_run
@@ -120,7 +122,9 @@ def results_folder(experiment: Experiment, folder: Path | None = None) -> Path:
     return (folder or SHIPPED) / experiment.name
 
 
-def _file_jobs(experiment: Experiment):
+def file_jobs(experiment: Experiment) -> tuple[Sequence[Any], ModuleType]:
+    """A runner or world experiment's jobs and the module that makes and reads their result
+    files."""
     from sgim_nodes.experiments import runner_jobs, world_jobs
 
     if experiment.maker == "runner":
@@ -147,7 +151,7 @@ def ship_results(experiment: Experiment, runs_dir: Path, folder: Path | None = N
     today = behaviours(experiment)
     if not today or not runs_dir.is_dir():
         return []
-    jobs, module = _file_jobs(experiment)
+    jobs, module = file_jobs(experiment)
     target = results_folder(experiment, folder)
     stamps, written = _stamps(target), []
     for job in jobs:
@@ -172,7 +176,7 @@ def ship_results(experiment: Experiment, runs_dir: Path, folder: Path | None = N
 def read_result(experiment: Experiment, runs_dir: Path, job) -> dict | None:
     """A runner or world job's result: from the runs folder, else from the shipped file whose
     stamp is today's behaviour; None when neither has it."""
-    _, module = _file_jobs(experiment)
+    _, module = file_jobs(experiment)
     made = module.result_path(runs_dir, job)
     found = module.read_result(made) if made.is_file() else None
     if found is not None:
@@ -190,7 +194,7 @@ def shipped_names(experiment: Experiment) -> set[str]:
     if experiment.maker == "graph":
         return set(todays_tables(experiment))
     today = behaviours(experiment)
-    jobs, module = _file_jobs(experiment)
+    jobs, module = file_jobs(experiment)
     target = results_folder(experiment)
     stamps = _stamps(target)
     return {job.name for job in jobs if job.name in today and stamps.get(job.name) ==

@@ -332,9 +332,9 @@ def verify_results(experiment: Experiment, names: Sequence[str], say: Callable[[
     """Make the named jobs of a runner or world experiment again and compare their results
     with the shipped files; `movements`: each at that length (shortened)."""
     from sgim_nodes.experiments.runner_jobs import RunnerJob
-    from sgim_nodes.experiments.shipped import _file_jobs, results_folder
+    from sgim_nodes.experiments.shipped import file_jobs, results_folder
 
-    jobs, module = _file_jobs(experiment)
+    jobs, module = file_jobs(experiment)
     by_name = {job.name: job for job in jobs}
     found = []
     for name in names:
