@@ -41,8 +41,7 @@ if [[ $quick == 1 ]]; then
 else
   # Two workers more than the cores: the graph tests spend part of their time waiting (for
   # discovery, a teacher's turn, a timeout they test), and the extra workers fill those waits
-  # (2 quiet cores: pytest 694 s with 2 workers, 636 s with 3; later 534 s with 3, 504 s
-  # with 4; docs/notes/measurements.md).
+  # (the counts measured against each other: docs/notes/measurements.md).
   workers="${SGIM_TEST_WORKERS:-$(( $(nproc) + 2 ))}"
   # ROS tests must run here: a missing rclpy or sgim_msgs is an error, not a skip.
   SGIM_REQUIRE_ROS=1 python -m pytest -q --timeout=600 -n "$workers" "$@"
