@@ -42,6 +42,19 @@ def test_runs_of_two_numpy_versions_are_refused(make_study, tmp_path: Path,
     assert "code:" not in err and "python:" not in err  # only what differs is named
 
 
+@pytest.mark.parametrize(("recorded", "alike"), [("3.11", True), ("3.12", False)])
+def test_python_counts_by_its_minor_release(make_study, recorded: str, alike: bool) -> None:
+    # Fingerprints record Python's major and minor release; older runs (3.11.7 here) recorded
+    # the patch release too.
+    study = load_study(make_study(fingerprints={name: fingerprint(python=recorded)
+                                                for name in RANDOM}))
+    unlike = unlike_runs(study)
+    if alike:
+        assert unlike == []
+    else:
+        assert [(u.what, set(u.holders)) for u in unlike] == [("python", {"3.11", "3.12"})]
+
+
 @pytest.mark.slow
 def test_allow_mixed_pools_them_and_says_so_at_the_top(make_study, tmp_path: Path) -> None:
     study = make_study(fingerprints={"random-seed2": fingerprint(numpy="1.26.4")})
