@@ -52,7 +52,7 @@ SECONDS: dict[str, float] = {
     "tests/core/test_learners.py::test_goal_babbling_beats_random_on_the_twenty_joint_arm": 34,
     "tests/ros/test_faults.py::test_an_interrupted_run_resumes_from_its_recording_to_the_"
     "same_final_count": 72,
-    "tests/experiments/test_reproduce_graph.py": 55,
+    "tests/experiments/test_reproduce_graph.py": 224,
     "tests/ros/test_pace.py::test_wait_for_teacher_seconds_ends_each_turn_and_zero_never_"
     "waits": 69,
     "tests/core/test_portable.py": 63,
@@ -101,7 +101,7 @@ SECONDS: dict[str, float] = {
     "with_a_message": 18,
     "tests/ros/test_parameters_live.py": 17,
     "tests/ros/test_goal_jobs.py": 36,
-    "tests/experiments/test_references.py": 30,
+    "tests/experiments/test_references.py": 53,
     "tests/ros/test_first_hour.py::test_run_sh_honours_runs_dir_and_name": 19,
     "tests/ros/test_launcher_faults.py::test_a_second_run_asking_for_a_run_s_domain_is_"
     "refused": 15,
