@@ -88,6 +88,17 @@ def test_differences_name_the_fields_and_the_parameters():
     assert fp.Fingerprint.from_dict({"value": "abc"}) is None
 
 
+def test_a_recorded_python_patch_release_reads_as_its_minor_release():
+    today = fp.fingerprint({"x": 1})
+    assert today.fields["python"].count(".") == 1
+    older = {**today.to_dict(), "fields": {**today.fields,
+                                           "python": today.fields["python"] + ".7"}}
+    read = fp.Fingerprint.from_dict(older)
+    assert read is not None and read.value == today.value and not read.differences(today)
+    other = {**today.to_dict(), "fields": {**today.fields, "python": "2.7.18"}}
+    assert fp.Fingerprint.from_dict(other).differences(today) == ["python"]
+
+
 @pytest.mark.ros
 def test_a_graph_runs_fingerprint_depends_on_what_shapes_it_only():
     from sgim_nodes.graph.description import RunOptions, fingerprint, graph, parameters

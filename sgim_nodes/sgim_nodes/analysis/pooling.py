@@ -59,16 +59,6 @@ def run_fingerprint(run: RunData) -> Fingerprint | None:
     return Fingerprint.from_dict(run.metadata.get("fingerprint"))
 
 
-def environment_value(fingerprint: Fingerprint, key: str) -> str:
-    """A fingerprint's environment field as runs are compared. Python counts by its major and
-    minor release, which is what a fingerprint records (see library_versions); a run recorded
-    before that holds the patch release too, and is alike with today's of the same minor."""
-    value = str(fingerprint.fields.get(key, NONE))
-    if key == "python":
-        return ".".join(value.split(".")[:2])
-    return value
-
-
 def _holders(values: Mapping[str, str]) -> dict[str, list[str]]:
     """run name -> value, as value -> run names, the most common value first."""
     out: dict[str, list[str]] = {}
@@ -122,7 +112,7 @@ def unlike_runs(study: Study) -> list[Unlike]:
             name: "recorded" if fp else f"{NONE} (made before learner fingerprints)"
             for name, fp in prints.items()})))
     for key in ENVIRONMENT_FIELDS:
-        values = {name: environment_value(fp, key) for name, fp in found.items()}
+        values = {name: fp.fields.get(key, NONE) for name, fp in found.items()}
         if len(set(values.values())) > 1:
             out.append(Unlike(key, _holders(values)))
     resumed: dict[str, str] = {}

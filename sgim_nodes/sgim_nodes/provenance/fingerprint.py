@@ -188,11 +188,16 @@ def data_files() -> dict[str, Path]:
                                              files.TEACHING_SET, files.BENCHMARK_FLOOR)}
 
 
+def python_release(version: str) -> str:
+    """Python's major and minor release ('3.11' of '3.11.7'): what a fingerprint records."""
+    return ".".join(version.split(".")[:2])
+
+
 def library_versions() -> dict[str, str]:
     """The versions that can change a run: the libraries' (pinned by requirements.txt), and
     Python's major and minor (a patch release changes no arithmetic, and machines differ in
     it: Debian 12 has 3.11.2)."""
-    found = {"python": ".".join(platform.python_version_tuple()[:2])}
+    found = {"python": python_release(".".join(platform.python_version_tuple()))}
     for dist in LIBRARIES:
         try:
             found[dist] = metadata.version(dist)
@@ -243,10 +248,14 @@ class Fingerprint:
 
     @classmethod
     def from_dict(cls, data: Any) -> Fingerprint | None:
-        """Read back to_dict's mapping (None when absent or malformed: an older run)."""
+        """Read back to_dict's mapping (None when absent or malformed: an older run). A run
+        recorded before fingerprints held Python's major and minor release only holds its
+        patch release too; it reads as the release today's fingerprints record."""
         if not isinstance(data, Mapping) or not isinstance(data.get("fields"), Mapping):
             return None
         fields_ = {str(k): str(v) for k, v in data["fields"].items()}
+        if "python" in fields_:
+            fields_["python"] = python_release(fields_["python"])
         params = data.get("parameters")
         return cls(fields_, dict(params) if isinstance(params, Mapping) else {})
 
